@@ -1,0 +1,579 @@
+//! The slab simulator: a stack of homogeneous layers, infinite in x and y, lit from above by
+//! a collimated beam (normal or oblique) or by diffuse light. It tallies what leaves the top
+//! (specular and diffuse reflectance), what leaves the bottom (unscattered and diffuse
+//! transmittance) and what each layer absorbs, each with its standard error.
+//!
+//! Transport is the paper's photon tracing in its simplest geometry: free flight (eq. 2),
+//! scatter-or-absorb by the albedo (eqs. 3–4), a new direction from the phase function
+//! (eqs. 7–10), and Fresnel reflect-or-refract at every interface. z points down; layer i
+//! spans [z_i, z_{i+1}] with z_0 = 0.
+//!
+//! Two unbiased estimators:
+//! - `Analog` (the paper's): every photon carries weight 1 and is scattered or absorbed
+//!   whole by the albedo roulette; interfaces reflect or refract it by a Fresnel roulette.
+//! - `Weighted` (MCML style): the first-surface specular reflection is taken exactly, each
+//!   interaction deposits w(1−a) and keeps w·a, and at the outer surfaces the escaping
+//!   fraction w(1−R) is tallied while w·R is reflected. Once w < 1e-4 the photon finishes by
+//!   Russian roulette with survival probability a that keeps its whole weight (and deposits
+//!   it all when it loses). Unlike MCML's "survive with 1/m, weight ×m", this conserves
+//!   energy exactly photon by photon, so R + T + A = 1 holds per run, not just on average.
+
+use crate::control::Control;
+use crate::error::{check_range, Error, Result};
+use crate::fresnel::reflectance_and_cos_t;
+use crate::math::{rotate_direction, Vec3};
+use crate::medium::Medium;
+use crate::rng::Stream;
+use crate::sampling::{cosine_hemisphere, sample_exponential};
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Photons per batch: each batch has its own random stream keyed by (seed, band, batch),
+/// so the numbers do not depend on how batches are spread over threads.
+pub const BATCH: u64 = 8192;
+/// Below this weight the weighted estimator switches to the energy-exact roulette.
+const WEIGHT_THRESHOLD: f64 = 1e-4;
+/// A photon with more interactions than this means an input Monte Carlo cannot finish.
+const MAX_EVENTS: u64 = 50_000_000;
+
+/// One layer of the slab.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlabLayer {
+    /// The layer's medium.
+    pub medium: Medium,
+    /// Thickness [mm].
+    pub thickness: f64,
+}
+
+/// How the slab's top is lit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Incidence {
+    /// Collimated beam along +z.
+    Normal,
+    /// Collimated beam at this polar angle [rad] from the normal, in the above medium.
+    Angle(f64),
+    /// Diffuse (Lambertian) light from the whole upper hemisphere.
+    Diffuse,
+}
+
+/// Which estimator tallies the photons.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Estimator {
+    /// Albedo roulette, weight 1 (the paper's).
+    Analog,
+    /// Weight deposition with energy-exact roulette (MCML style).
+    Weighted,
+}
+
+/// Everything one slab run needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SlabConfig {
+    /// Layers from top to bottom.
+    pub layers: Vec<SlabLayer>,
+    /// Refractive index above the slab.
+    pub n_above: f64,
+    /// Refractive index below the slab.
+    pub n_below: f64,
+    /// Illumination.
+    pub incidence: Incidence,
+    /// Estimator.
+    pub estimator: Estimator,
+    /// Number of photons launched (≥ 1).
+    pub n_photons: u64,
+    /// Seed of the run.
+    pub seed: u64,
+    /// Band index, mixed into the random streams.
+    pub band: u64,
+    /// Radial profile: number of bins and maximum radius [mm]; `None` for no profile.
+    pub radial: Option<(usize, f64)>,
+    /// Number of exit-angle bins over [0, 90°]; `None` for no histogram.
+    pub angular_bins: Option<usize>,
+}
+
+/// Scalar results, in this order in [`SlabResult::values`] and [`SlabResult::stderr`].
+pub const SCALAR_KEYS: [&str; 7] = [
+    "specular_reflectance",
+    "diffuse_reflectance",
+    "total_reflectance",
+    "unscattered_transmittance",
+    "diffuse_transmittance",
+    "total_transmittance",
+    "absorbed",
+];
+const SPEC: usize = 0;
+const DIFF_R: usize = 1;
+const TOT_R: usize = 2;
+const UNSC_T: usize = 3;
+const DIFF_T: usize = 4;
+const TOT_T: usize = 5;
+const ABS: usize = 6;
+
+/// What a slab run measured; all fractions of the incident power.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SlabResult {
+    /// Means of [`SCALAR_KEYS`]. "Diffuse" reflectance is everything leaving the top except
+    /// the first-surface specular reflection (as in MCML's Rd).
+    pub values: [f64; 7],
+    /// Standard errors of the means, per photon.
+    pub stderr: [f64; 7],
+    /// Absorbed fraction per layer.
+    pub absorbed_per_layer: Vec<f64>,
+    /// Photons launched.
+    pub photons: u64,
+    /// Diffuse reflectance per unit area R(r) [1/mm²] at radial bin centres (if asked).
+    pub radial_reflectance: Vec<f64>,
+    /// Transmittance per unit area T(r) [1/mm²] (if asked).
+    pub radial_transmittance: Vec<f64>,
+    /// Fraction of power leaving the top per exit-angle bin (if asked), specular excluded.
+    pub angular_reflectance: Vec<f64>,
+    /// Fraction of power leaving the bottom per exit-angle bin (if asked).
+    pub angular_transmittance: Vec<f64>,
+}
+
+impl SlabResult {
+    /// Mean of the scalar named `key` (one of [`SCALAR_KEYS`]).
+    pub fn get(&self, key: &str) -> Option<f64> {
+        SCALAR_KEYS.iter().position(|k| *k == key).map(|i| self.values[i])
+    }
+}
+
+impl SlabConfig {
+    /// Check every field; messages name the field and its allowed range.
+    pub fn validate(&self) -> Result<()> {
+        if self.layers.is_empty() {
+            return Err(Error::InvalidInput("layers: at least one layer is needed".into()));
+        }
+        for (i, l) in self.layers.iter().enumerate() {
+            let name = format!("layers[{i}].");
+            Medium::new(&name, l.medium.sigma_a, l.medium.sigma_s, l.medium.eta, l.medium.phase)?;
+            check_range(&format!("{name}thickness"), l.thickness, 0.0, true, f64::INFINITY, true, "mm")?;
+        }
+        check_range("n_above", self.n_above, 1.0, false, f64::INFINITY, true, "")?;
+        check_range("n_below", self.n_below, 1.0, false, f64::INFINITY, true, "")?;
+        if self.n_photons == 0 {
+            return Err(Error::InvalidInput("photons = 0 is out of range: allowed [1, 2^64)".into()));
+        }
+        if let Incidence::Angle(theta) = self.incidence {
+            check_range("incidence angle", theta.to_degrees(), 0.0, false, 90.0, true, "deg")?;
+        }
+        if let Some((bins, rmax)) = self.radial {
+            if bins == 0 {
+                return Err(Error::InvalidInput("radial bins = 0: allowed ≥ 1".into()));
+            }
+            check_range("radial max", rmax, 0.0, true, f64::INFINITY, true, "mm")?;
+        }
+        if self.angular_bins == Some(0) {
+            return Err(Error::InvalidInput("angular bins = 0: allowed ≥ 1".into()));
+        }
+        Ok(())
+    }
+}
+
+/// Per-batch accumulators: per-photon sums and sums of squares of each scalar.
+#[derive(Clone)]
+struct Tally {
+    sum: [f64; 7],
+    sumsq: [f64; 7],
+    absorbed: Vec<f64>,
+    radial_r: Vec<f64>,
+    radial_t: Vec<f64>,
+    angle_r: Vec<f64>,
+    angle_t: Vec<f64>,
+}
+
+impl Tally {
+    fn new(cfg: &SlabConfig) -> Self {
+        let rb = cfg.radial.map_or(0, |r| r.0);
+        let ab = cfg.angular_bins.unwrap_or(0);
+        Self {
+            sum: [0.0; 7],
+            sumsq: [0.0; 7],
+            absorbed: vec![0.0; cfg.layers.len()],
+            radial_r: vec![0.0; rb],
+            radial_t: vec![0.0; rb],
+            angle_r: vec![0.0; ab],
+            angle_t: vec![0.0; ab],
+        }
+    }
+    fn merge(&mut self, o: &Tally) {
+        let add = |a: &mut [f64], b: &[f64]| a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+        add(&mut self.sum, &o.sum);
+        add(&mut self.sumsq, &o.sumsq);
+        add(&mut self.absorbed, &o.absorbed);
+        add(&mut self.radial_r, &o.radial_r);
+        add(&mut self.radial_t, &o.radial_t);
+        add(&mut self.angle_r, &o.angle_r);
+        add(&mut self.angle_t, &o.angle_t);
+    }
+}
+
+/// Run the slab simulation. Batches run in parallel on the current rayon pool and are
+/// reduced in batch order, so a seed gives the same numbers for any thread count.
+pub fn simulate(cfg: &SlabConfig, control: &Control) -> Result<SlabResult> {
+    cfg.validate()?;
+    let n_batches = cfg.n_photons.div_ceil(BATCH);
+    let tracer = Tracer::new(cfg);
+    let tallies: Vec<Result<Tally>> = (0..n_batches)
+        .into_par_iter()
+        .map(|b| {
+            control.check()?;
+            let count = BATCH.min(cfg.n_photons - b * BATCH);
+            let mut rng = Stream::new(cfg.seed, cfg.band, b);
+            let mut tally = Tally::new(cfg);
+            let mut photon = [0.0; 7];
+            for _ in 0..count {
+                photon.fill(0.0);
+                tracer.trace(&mut rng, &mut photon, &mut tally, control)?;
+                for k in 0..7 {
+                    tally.sum[k] += photon[k];
+                    tally.sumsq[k] += photon[k] * photon[k];
+                }
+            }
+            control.add_done(count);
+            Ok(tally)
+        })
+        .collect();
+    let mut total = Tally::new(cfg);
+    for t in tallies {
+        total.merge(&t?);
+    }
+    Ok(tracer.finish(&total))
+}
+
+/// Precomputed geometry of the stack plus the photon walk.
+struct Tracer<'a> {
+    cfg: &'a SlabConfig,
+    /// Depth of the top of each layer, plus the bottom of the last [mm].
+    z: Vec<f64>,
+}
+
+impl<'a> Tracer<'a> {
+    fn new(cfg: &'a SlabConfig) -> Self {
+        let mut z = vec![0.0];
+        for l in &cfg.layers {
+            z.push(z.last().unwrap() + l.thickness);
+        }
+        Self { cfg, z }
+    }
+
+    fn eta_of(&self, layer: isize) -> f64 {
+        if layer < 0 {
+            self.cfg.n_above
+        } else if layer as usize >= self.cfg.layers.len() {
+            self.cfg.n_below
+        } else {
+            self.cfg.layers[layer as usize].medium.eta
+        }
+    }
+
+    /// Record power `w` leaving the slab at `pos` along `d` (top if d.z < 0).
+    fn exit(&self, pos: Vec3, d: Vec3, w: f64, scattered: bool, ph: &mut [f64; 7], t: &mut Tally) {
+        let top = d.z < 0.0;
+        if top {
+            ph[DIFF_R] += w;
+            ph[TOT_R] += w;
+        } else {
+            ph[if scattered { DIFF_T } else { UNSC_T }] += w;
+            ph[TOT_T] += w;
+        }
+        if let Some((bins, rmax)) = self.cfg.radial {
+            let r = (pos.x * pos.x + pos.y * pos.y).sqrt();
+            let b = (r / rmax * bins as f64) as usize;
+            if b < bins {
+                let v = if top { &mut t.radial_r } else { &mut t.radial_t };
+                v[b] += w;
+            }
+        }
+        if let Some(bins) = self.cfg.angular_bins {
+            let theta = d.z.abs().min(1.0).acos();
+            let b = ((theta / (0.5 * PI)) * bins as f64).min(bins as f64 - 1.0) as usize;
+            let v = if top { &mut t.angle_r } else { &mut t.angle_t };
+            v[b] += w;
+        }
+    }
+
+    /// Trace one photon; its contributions go to `ph` (scalars) and `t` (profiles).
+    fn trace(&self, rng: &mut Stream, ph: &mut [f64; 7], t: &mut Tally, control: &Control) -> Result<()> {
+        let cfg = self.cfg;
+        let weighted = cfg.estimator == Estimator::Weighted;
+        let n_layers = cfg.layers.len() as isize;
+        // launch direction in the medium above
+        let d_above = match cfg.incidence {
+            Incidence::Normal => Vec3::Z,
+            Incidence::Angle(theta) => Vec3::new(theta.sin(), 0.0, theta.cos()),
+            Incidence::Diffuse => cosine_hemisphere(rng.uniform2()),
+        };
+        let eta0 = cfg.layers[0].medium.eta;
+        let (r0, cos_t0) = reflectance_and_cos_t(d_above.z, cfg.n_above, eta0);
+        let mut w = 1.0;
+        if weighted {
+            ph[SPEC] += r0;
+            ph[TOT_R] += r0;
+            w = 1.0 - r0;
+            if w <= 0.0 {
+                return Ok(());
+            }
+        } else if rng.uniform() < r0 {
+            ph[SPEC] += 1.0;
+            ph[TOT_R] += 1.0;
+            return Ok(());
+        }
+        let k = cfg.n_above / eta0;
+        let mut d = Vec3::new(d_above.x * k, d_above.y * k, cos_t0);
+        let mut pos = Vec3::ZERO;
+        let mut layer: isize = 0;
+        let mut scattered = false;
+        // `roulette` is set once the weighted photon's weight fell below the threshold
+        let mut roulette = !weighted;
+        let mut events: u64 = 0;
+        loop {
+            let l = &cfg.layers[layer as usize];
+            let sigma_t = l.medium.sigma_t();
+            let s = sample_exponential(rng.uniform_open0(), sigma_t);
+            let li = layer as usize;
+            let db = if d.z > 0.0 {
+                (self.z[li + 1] - pos.z) / d.z
+            } else if d.z < 0.0 {
+                (self.z[li] - pos.z) / d.z
+            } else {
+                f64::INFINITY
+            };
+            events += 1;
+            if events & 0xFFFF == 0 {
+                control.check()?;
+                if events > MAX_EVENTS {
+                    return Err(Error::InvalidInput(format!(
+                        "a photon exceeded {MAX_EVENTS} interactions: the slab is too thick \
+                         optically for Monte Carlo (layers[{li}] μt·d = {:.3e})",
+                        sigma_t * l.thickness
+                    )));
+                }
+            }
+            if s < db {
+                // interaction inside layer li (eqs. 2–4)
+                pos += d * s;
+                let albedo = l.medium.albedo();
+                if roulette {
+                    if rng.uniform() >= albedo {
+                        t.absorbed[li] += w;
+                        ph[ABS] += w;
+                        return Ok(());
+                    }
+                } else {
+                    let dep = w * (1.0 - albedo);
+                    t.absorbed[li] += dep;
+                    ph[ABS] += dep;
+                    w -= dep;
+                    if w < WEIGHT_THRESHOLD {
+                        roulette = true;
+                    }
+                }
+                // new direction from the phase function (eqs. 7–10)
+                let cos_theta = l.medium.phase.sample_cos(rng.uniform2());
+                let (sp, cp) = (2.0 * PI * rng.uniform()).sin_cos();
+                d = rotate_direction(d, cos_theta, cp, sp);
+                scattered = true;
+                continue;
+            }
+            // reach the interface
+            let down = d.z > 0.0;
+            pos += d * db;
+            pos.z = if down { self.z[li + 1] } else { self.z[li] };
+            let next = if down { layer + 1 } else { layer - 1 };
+            let eta_i = l.medium.eta;
+            let eta_t = self.eta_of(next);
+            let (r, cos_t) = reflectance_and_cos_t(d.z, eta_i, eta_t);
+            let outside = next < 0 || next >= n_layers;
+            let k = eta_i / eta_t;
+            let d_t = Vec3::new(d.x * k, d.y * k, if down { cos_t } else { -cos_t });
+            if outside && !roulette {
+                // split: the transmitted part escapes, the reflected part goes on
+                if r < 1.0 {
+                    self.exit(pos, d_t, w * (1.0 - r), scattered, ph, t);
+                }
+                w *= r;
+                d.z = -d.z;
+                if w <= 0.0 {
+                    return Ok(());
+                }
+                if w < WEIGHT_THRESHOLD {
+                    roulette = true;
+                }
+                continue;
+            }
+            if r >= 1.0 || (r > 0.0 && rng.uniform() < r) {
+                d.z = -d.z;
+                continue;
+            }
+            d = d_t;
+            if outside {
+                self.exit(pos, d, w, scattered, ph, t);
+                return Ok(());
+            }
+            layer = next;
+        }
+    }
+
+    fn finish(&self, t: &Tally) -> SlabResult {
+        let n = self.cfg.n_photons as f64;
+        let mut values = [0.0; 7];
+        let mut stderr = [0.0; 7];
+        for k in 0..7 {
+            let mean = t.sum[k] / n;
+            values[k] = mean;
+            stderr[k] = if n > 1.0 {
+                ((t.sumsq[k] / n - mean * mean).max(0.0) / (n - 1.0)).sqrt()
+            } else {
+                0.0
+            };
+        }
+        let per_area = |v: &[f64]| -> Vec<f64> {
+            let Some((bins, rmax)) = self.cfg.radial else { return vec![] };
+            let dr = rmax / bins as f64;
+            v.iter()
+                .enumerate()
+                .map(|(i, x)| x / n / (PI * dr * dr * ((i + 1) * (i + 1) - i * i) as f64))
+                .collect()
+        };
+        SlabResult {
+            values,
+            stderr,
+            absorbed_per_layer: t.absorbed.iter().map(|a| a / n).collect(),
+            photons: self.cfg.n_photons,
+            radial_reflectance: per_area(&t.radial_r),
+            radial_transmittance: per_area(&t.radial_t),
+            angular_reflectance: t.angle_r.iter().map(|x| x / n).collect(),
+            angular_transmittance: t.angle_t.iter().map(|x| x / n).collect(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::phase::PhaseFunction;
+
+    pub(crate) fn one_layer(mua: f64, mus: f64, g: f64, n: f64, d: f64, photons: u64) -> SlabConfig {
+        SlabConfig {
+            layers: vec![SlabLayer {
+                medium: Medium::new("", mua, mus, n, PhaseFunction::HenyeyGreenstein { g })
+                    .unwrap(),
+                thickness: d,
+            }],
+            n_above: 1.0,
+            n_below: 1.0,
+            incidence: Incidence::Normal,
+            estimator: Estimator::Analog,
+            n_photons: photons,
+            seed: 1,
+            band: 0,
+            radial: None,
+            angular_bins: None,
+        }
+    }
+
+    fn run(cfg: &SlabConfig) -> SlabResult {
+        simulate(cfg, &Control::new()).unwrap()
+    }
+
+    #[test]
+    fn energy_is_conserved_exactly_by_both_estimators() {
+        for est in [Estimator::Analog, Estimator::Weighted] {
+            for inc in [Incidence::Normal, Incidence::Diffuse, Incidence::Angle(0.7)] {
+                let mut cfg = one_layer(1.0, 9.0, 0.75, 1.4, 0.2, 20_000);
+                cfg.estimator = est;
+                cfg.incidence = inc;
+                let r = run(&cfg);
+                let sum = r.values[TOT_R] + r.values[TOT_T] + r.values[ABS];
+                assert!((sum - 1.0).abs() < 1e-9, "{est:?} {inc:?}: {sum}");
+                let parts = r.values[SPEC] + r.values[DIFF_R];
+                assert!((parts - r.values[TOT_R]).abs() < 1e-12);
+                let per_layer: f64 = r.absorbed_per_layer.iter().sum();
+                assert!((per_layer - r.values[ABS]).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn same_seed_same_numbers_for_any_thread_count() {
+        let cfg = one_layer(0.5, 20.0, 0.9, 1.5, 1.0, 3 * BATCH + 17);
+        let pool1 = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let pool3 = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        let a = pool1.install(|| run(&cfg));
+        let b = pool3.install(|| run(&cfg));
+        assert_eq!(a, b);
+        let mut other = cfg.clone();
+        other.seed = 2;
+        assert_ne!(run(&other).values, a.values);
+    }
+
+    /// Non-scattering, non-absorbing slab: two incoherent Fresnel surfaces give
+    /// R = r + (1−r)² r / (1 − r²) (tooth-optics.md §7: 0.10853 for n = 1.63).
+    #[test]
+    fn clear_slab_matches_two_surface_fresnel() {
+        for est in [Estimator::Analog, Estimator::Weighted] {
+            let mut cfg = one_layer(0.0, 0.0, 0.0, 1.63, 1.0, 200_000);
+            cfg.estimator = est;
+            let res = run(&cfg);
+            let r = ((1.63f64 - 1.0) / 2.63).powi(2);
+            let r_tot = r + (1.0 - r).powi(2) * r / (1.0 - r * r);
+            assert!((r_tot - 0.10853).abs() < 1e-5);
+            let tol = 4.0 * res.stderr[TOT_R] + 1e-12;
+            assert!((res.values[TOT_R] - r_tot).abs() < tol, "{est:?} {:?}", res.values);
+            assert_eq!(res.values[DIFF_T], 0.0);
+            assert!((res.values[UNSC_T] - (1.0 - r_tot)).abs() < tol);
+        }
+    }
+
+    /// Pure absorber, index matched: Beer–Lambert T = exp(−μa d).
+    #[test]
+    fn absorber_follows_beer_lambert() {
+        let res = run(&one_layer(2.0, 0.0, 0.0, 1.0, 0.5, 100_000));
+        let t = (-1.0f64).exp();
+        assert!((res.values[UNSC_T] - t).abs() < 4.0 * res.stderr[UNSC_T]);
+        assert_eq!(res.values[TOT_R], 0.0);
+    }
+
+    #[test]
+    fn profiles_add_up_to_the_totals() {
+        let mut cfg = one_layer(1.0, 9.0, 0.75, 1.0, 0.2, 50_000);
+        cfg.radial = Some((400, 40.0));
+        cfg.angular_bins = Some(30);
+        let r = run(&cfg);
+        let dr = 40.0 / 400.0;
+        let integ: f64 = r
+            .radial_reflectance
+            .iter()
+            .enumerate()
+            .map(|(i, x)| x * PI * dr * dr * ((i + 1) * (i + 1) - i * i) as f64)
+            .sum();
+        assert!((integ - r.values[DIFF_R]).abs() < 1e-3);
+        let ang: f64 = r.angular_transmittance.iter().sum();
+        assert!((ang - r.values[TOT_T]).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_input_is_refused_with_the_field_named() {
+        let mut cfg = one_layer(1.0, 9.0, 0.75, 1.0, 0.2, 10);
+        cfg.layers[0].thickness = 0.0;
+        let e = simulate(&cfg, &Control::new()).unwrap_err().to_string();
+        assert!(e.contains("layers[0].thickness"), "{e}");
+        let mut cfg = one_layer(1.0, 9.0, 0.75, 1.0, 0.2, 0);
+        assert!(simulate(&cfg, &Control::new()).unwrap_err().to_string().contains("photons"));
+        cfg.n_photons = 10;
+        cfg.layers[0].medium.sigma_a = -1.0;
+        let e = simulate(&cfg, &Control::new()).unwrap_err().to_string();
+        assert!(e.contains("layers[0].mua"), "{e}");
+        cfg.layers[0].medium.sigma_a = 1.0;
+        cfg.n_below = 0.5;
+        assert!(simulate(&cfg, &Control::new()).unwrap_err().to_string().contains("n_below"));
+    }
+
+    #[test]
+    fn cancellation_stops_the_run() {
+        let cfg = one_layer(0.01, 100.0, 0.9, 1.5, 10.0, 10_000_000);
+        let c = Control::new();
+        c.cancel();
+        assert_eq!(simulate(&cfg, &c).unwrap_err(), Error::Cancelled);
+    }
+}

@@ -1,0 +1,84 @@
+//! Warps from uniform numbers to the distributions photon transport needs, with their pdfs.
+
+use crate::math::Vec3;
+use std::f64::consts::PI;
+
+/// Free-flight distance of eq. 2, d = −ln ξ / σt, for ξ in (0, 1].
+/// Returns +∞ when σt = 0 (the photon never interacts).
+#[inline]
+pub fn sample_exponential(u_open0: f64, sigma_t: f64) -> f64 {
+    if sigma_t > 0.0 {
+        -u_open0.ln() / sigma_t
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Uniform direction on the unit sphere; pdf 1/(4π).
+pub fn uniform_sphere(u: [f64; 2]) -> Vec3 {
+    let z = 1.0 - 2.0 * u[0];
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (s, c) = (2.0 * PI * u[1]).sin_cos();
+    Vec3::new(r * c, r * s, z)
+}
+
+/// Cosine-weighted direction about +z; pdf cos θ / π.
+pub fn cosine_hemisphere(u: [f64; 2]) -> Vec3 {
+    let r = u[0].sqrt();
+    let (s, c) = (2.0 * PI * u[1]).sin_cos();
+    Vec3::new(r * c, r * s, (1.0 - u[0]).max(0.0).sqrt())
+}
+
+/// Uniform point on the unit disc (concentric-free polar map; fine for area lights).
+pub fn uniform_disc(u: [f64; 2]) -> (f64, f64) {
+    let r = u[0].sqrt();
+    let (s, c) = (2.0 * PI * u[1]).sin_cos();
+    (r * c, r * s)
+}
+
+/// Index drawn from unnormalised non-negative `weights` by inverting their CDF.
+pub fn sample_discrete(weights: &[f64], u: f64) -> usize {
+    let total: f64 = weights.iter().sum();
+    let mut target = u * total;
+    for (i, w) in weights.iter().enumerate() {
+        if target < *w {
+            return i;
+        }
+        target -= w;
+    }
+    weights.len() - 1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Stream;
+
+    #[test]
+    fn exponential_mean_is_mean_free_path() {
+        let mut s = Stream::new(3, 0, 0);
+        let n = 200_000;
+        let sigma_t = 2.5;
+        let mean: f64 =
+            (0..n).map(|_| sample_exponential(s.uniform_open0(), sigma_t)).sum::<f64>() / n as f64;
+        // variance of Exp(σt) is 1/σt²
+        assert!((mean - 1.0 / sigma_t).abs() < 4.0 / sigma_t / (n as f64).sqrt());
+        assert!(sample_exponential(0.5, 0.0).is_infinite());
+    }
+
+    #[test]
+    fn cosine_hemisphere_mean_cosine_is_two_thirds() {
+        let mut s = Stream::new(4, 0, 0);
+        let n = 200_000;
+        let mean: f64 = (0..n).map(|_| cosine_hemisphere(s.uniform2()).z).sum::<f64>() / n as f64;
+        // E[cos] = 2/3, Var = 1/2 - 4/9 = 1/18
+        assert!((mean - 2.0 / 3.0).abs() < 4.0 * (1.0 / 18.0 / n as f64).sqrt());
+    }
+
+    #[test]
+    fn discrete_picks_by_weight() {
+        assert_eq!(sample_discrete(&[1.0, 0.0, 3.0], 0.1), 0);
+        assert_eq!(sample_discrete(&[1.0, 0.0, 3.0], 0.3), 2);
+        assert_eq!(sample_discrete(&[1.0, 0.0, 3.0], 0.9999), 2);
+    }
+}

@@ -1,0 +1,130 @@
+//! Binding of the slab simulator and of the phase functions (for tests and plots).
+
+use crate::runner;
+use dentalux_core::integrators::slab::{
+    simulate, Estimator, Incidence, SlabConfig, SlabLayer, SCALAR_KEYS,
+};
+use dentalux_core::medium::Medium;
+use dentalux_core::phase::PhaseFunction;
+use dentalux_core::rng::Stream;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// Phase function from g, f_d and optional (weight, g) lobes; `name` prefixes errors.
+pub fn phase_from(name: &str, g: f64, fd: f64, lobes: Option<Vec<(f64, f64)>>) -> PyResult<PhaseFunction> {
+    let p = match lobes {
+        Some(l) if !l.is_empty() => PhaseFunction::multi_lobe(&l),
+        _ => PhaseFunction::hg_with_isotropic(g, fd),
+    };
+    p.map_err(|e| PyValueError::new_err(format!("{name}{e}")))
+}
+
+/// One layer as Python passes it: (mua, mus, g, fd, n, thickness, lobes).
+type LayerTuple = (f64, f64, f64, f64, f64, f64, Option<Vec<(f64, f64)>>);
+
+/// Simulate a layered slab; returns a dict of the results (see `dentalux.slab`).
+#[pyfunction]
+#[pyo3(signature = (layers, n_photons, seed, n_above=1.0, n_below=1.0, incidence="normal",
+    angle_deg=0.0, estimator="analog", threads=None, band=0, radial=None, angular_bins=None,
+    progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn slab_simulate<'py>(
+    py: Python<'py>,
+    layers: Vec<LayerTuple>,
+    n_photons: u64,
+    seed: u64,
+    n_above: f64,
+    n_below: f64,
+    incidence: &str,
+    angle_deg: f64,
+    estimator: &str,
+    threads: Option<usize>,
+    band: u64,
+    radial: Option<(usize, f64)>,
+    angular_bins: Option<usize>,
+    progress: Option<PyObject>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut stack = Vec::with_capacity(layers.len());
+    for (i, (mua, mus, g, fd, n, thickness, lobes)) in layers.into_iter().enumerate() {
+        let name = format!("layers[{i}].");
+        let phase = phase_from(&name, g, fd, lobes)?;
+        let medium = Medium::new(&name, mua, mus, n, phase).map_err(runner::to_py_err)?;
+        stack.push(SlabLayer { medium, thickness });
+    }
+    let incidence = match incidence {
+        "normal" => Incidence::Normal,
+        "diffuse" => Incidence::Diffuse,
+        "angle" => Incidence::Angle(angle_deg.to_radians()),
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "incidence = {other:?}: allowed 'normal', 'diffuse' or 'angle'"
+            )))
+        }
+    };
+    let estimator = match estimator {
+        "analog" => Estimator::Analog,
+        "weighted" => Estimator::Weighted,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "estimator = {other:?}: allowed 'analog' or 'weighted'"
+            )))
+        }
+    };
+    let cfg = SlabConfig {
+        layers: stack,
+        n_above,
+        n_below,
+        incidence,
+        estimator,
+        n_photons,
+        seed,
+        band,
+        radial,
+        angular_bins,
+    };
+    cfg.validate().map_err(runner::to_py_err)?;
+    let res = runner::run(py, threads, progress, |c| simulate(&cfg, c))?;
+    let out = PyDict::new(py);
+    let err = PyDict::new(py);
+    for (i, k) in SCALAR_KEYS.iter().enumerate() {
+        out.set_item(*k, res.values[i])?;
+        err.set_item(*k, res.stderr[i])?;
+    }
+    out.set_item("stderr", err)?;
+    out.set_item("absorbed_per_layer", res.absorbed_per_layer)?;
+    out.set_item("photons", res.photons)?;
+    out.set_item("radial_reflectance", res.radial_reflectance)?;
+    out.set_item("radial_transmittance", res.radial_transmittance)?;
+    out.set_item("angular_reflectance", res.angular_reflectance)?;
+    out.set_item("angular_transmittance", res.angular_transmittance)?;
+    Ok(out)
+}
+
+/// Draw `n` cosines from a phase function (for statistical tests from Python).
+#[pyfunction]
+#[pyo3(signature = (n, g, fd=0.0, lobes=None, seed=0))]
+pub fn phase_sample_cos(
+    n: usize,
+    g: f64,
+    fd: f64,
+    lobes: Option<Vec<(f64, f64)>>,
+    seed: u64,
+) -> PyResult<Vec<f64>> {
+    let p = phase_from("", g, fd, lobes)?;
+    let mut rng = Stream::new(seed, 0, 0);
+    Ok((0..n).map(|_| p.sample_cos(rng.uniform2())).collect())
+}
+
+/// Evaluate a phase function [1/sr] at the given cosines.
+#[pyfunction]
+#[pyo3(signature = (cos_theta, g, fd=0.0, lobes=None))]
+pub fn phase_eval(
+    cos_theta: Vec<f64>,
+    g: f64,
+    fd: f64,
+    lobes: Option<Vec<(f64, f64)>>,
+) -> PyResult<Vec<f64>> {
+    let p = phase_from("", g, fd, lobes)?;
+    Ok(cos_theta.iter().map(|&c| p.eval(c)).collect())
+}

@@ -1,0 +1,29 @@
+"""Type stubs of the private native module (see crates/dentalux-py)."""
+
+from collections.abc import Callable
+
+__version__: str
+
+LayerTuple = tuple[float, float, float, float, float, float, list[tuple[float, float]] | None]
+
+def slab_simulate(
+    layers: list[LayerTuple],
+    n_photons: int,
+    seed: int,
+    n_above: float = 1.0,
+    n_below: float = 1.0,
+    incidence: str = "normal",
+    angle_deg: float = 0.0,
+    estimator: str = "analog",
+    threads: int | None = None,
+    band: int = 0,
+    radial: tuple[int, float] | None = None,
+    angular_bins: int | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> dict: ...
+def phase_sample_cos(
+    n: int, g: float, fd: float = 0.0, lobes: list[tuple[float, float]] | None = None, seed: int = 0
+) -> list[float]: ...
+def phase_eval(
+    cos_theta: list[float], g: float, fd: float = 0.0, lobes: list[tuple[float, float]] | None = None
+) -> list[float]: ...

@@ -1,0 +1,36 @@
+"""The ``dentalux`` command line. Each subcommand lives in its own module here and is
+registered below; bad input exits with code 2 and a message naming the field."""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+
+from dentalux.cli import demo, slab
+
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    help="Spectral Monte Carlo rendering of teeth and dental materials (mm, 1/mm, nm).",
+)
+slab.register(app)
+demo.register(app)
+
+
+class UserError(Exception):
+    """An input problem reported to the user as `error: ...` with exit code 2."""
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console entry point."""
+    try:
+        app(args=argv, prog_name="dentalux")
+    except (ValueError, UserError, FileNotFoundError, KeyError) as exc:
+        msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        print(f"error: {msg}", file=sys.stderr)
+        sys.exit(2)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        sys.exit(130)

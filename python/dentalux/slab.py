@@ -1,0 +1,180 @@
+"""The slab simulator: what a spectrophotometer with an integrating sphere measures.
+
+A stack of homogeneous layers (infinite in x and y) lit from above by a collimated beam or by
+diffuse light. The photon transport runs in the Rust core; this module validates nothing
+itself beyond types (the core names the field and its allowed range) and packages results.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import asdict, dataclass, field
+from numbers import Real
+
+from dentalux import _core
+from dentalux.progress import bar
+
+SCALARS = (
+    "specular_reflectance",
+    "diffuse_reflectance",
+    "total_reflectance",
+    "unscattered_transmittance",
+    "diffuse_transmittance",
+    "total_transmittance",
+    "absorbed",
+)
+
+
+@dataclass(frozen=True)
+class Layer:
+    """One homogeneous layer.
+
+    mua, mus: absorption and scattering coefficients [1/mm]; g: HG asymmetry in (-1, 1);
+    n: refractive index (>= 1); thickness [mm]; fd: isotropic fraction of eq. 10 in [0, 1];
+    lobes: optional ((weight, g), ...) for a multi-lobe HG phase function (eq. 8), which then
+    replaces g and fd.
+    """
+
+    mua: float
+    mus: float
+    g: float = 0.0
+    n: float = 1.0
+    thickness: float = 1.0
+    fd: float = 0.0
+    lobes: tuple[tuple[float, float], ...] | None = None
+
+    def as_tuple(self, index: int) -> tuple:
+        for name in ("mua", "mus", "g", "n", "thickness", "fd"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, Real):
+                raise ValueError(
+                    f"layers[{index}].{name} = {value!r}: must be a number"
+                )
+        lobes = [tuple(map(float, lobe)) for lobe in self.lobes] if self.lobes else None
+        return (
+            float(self.mua),
+            float(self.mus),
+            float(self.g),
+            float(self.fd),
+            float(self.n),
+            float(self.thickness),
+            lobes,
+        )
+
+
+@dataclass
+class SlabResult:
+    """Fractions of the incident power, each with its standard error in ``stderr``.
+
+    ``diffuse_reflectance`` is everything that leaves the top except the first-surface
+    specular reflection (as MCML's Rd), so it includes unscattered light reflected back by
+    the lower interfaces.
+    """
+
+    specular_reflectance: float
+    diffuse_reflectance: float
+    total_reflectance: float
+    unscattered_transmittance: float
+    diffuse_transmittance: float
+    total_transmittance: float
+    absorbed: float
+    absorbed_per_layer: list[float]
+    stderr: dict[str, float]
+    photons: int
+    seconds: float
+    photons_per_second: float
+    threads: int
+    radial_reflectance: list[float] = field(default_factory=list)
+    radial_transmittance: list[float] = field(default_factory=list)
+    angular_reflectance: list[float] = field(default_factory=list)
+    angular_transmittance: list[float] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def parse_incidence(incidence: str) -> tuple[str, float]:
+    """``normal`` | ``diffuse`` | ``angle:DEG`` -> (kind, degrees)."""
+    if incidence in ("normal", "diffuse"):
+        return incidence, 0.0
+    if isinstance(incidence, str) and incidence.startswith("angle:"):
+        try:
+            deg = float(incidence.split(":", 1)[1])
+        except ValueError:
+            deg = math.nan
+        if not (0.0 <= deg < 90.0):
+            raise ValueError(
+                f"incidence = {incidence!r}: the angle must be a number in [0, 90) degrees"
+            )
+        return "angle", deg
+    raise ValueError(
+        f"incidence = {incidence!r}: allowed 'normal', 'diffuse' or 'angle:DEG'"
+    )
+
+
+def simulate(
+    layers: list[Layer],
+    n_photons: int = 100_000,
+    seed: int = 0,
+    n_above: float = 1.0,
+    n_below: float = 1.0,
+    incidence: str = "normal",
+    estimator: str = "analog",
+    threads: int | None = None,
+    radial: tuple[int, float] | None = None,
+    angular_bins: int | None = None,
+    band: int = 0,
+    progress: bool | None = False,
+) -> SlabResult:
+    """Simulate a layered slab lit from above; see :class:`SlabResult`.
+
+    ``radial=(bins, r_max_mm)`` adds R(r), T(r) per unit area [1/mm^2]; ``angular_bins``
+    adds exit-angle histograms over [0, 90) degrees. The same ``seed`` gives the same
+    numbers for any ``threads``.
+    """
+    if isinstance(layers, Layer):
+        layers = [layers]
+    tuples = []
+    for i, layer in enumerate(layers):
+        if not isinstance(layer, Layer):
+            raise ValueError(f"layers[{i}] must be a dentalux.Layer, got {type(layer).__name__}")
+        tuples.append(layer.as_tuple(i))
+    if isinstance(n_photons, bool) or not isinstance(n_photons, int) or n_photons < 1:
+        raise ValueError(f"n_photons = {n_photons!r} is out of range: allowed integer >= 1")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed = {seed!r} is out of range: allowed integer >= 0")
+    kind, deg = parse_incidence(incidence)
+    n_threads = threads or os.cpu_count() or 1
+    start = time.perf_counter()
+    with bar(n_photons, "photons", progress) as cb:
+        raw = _core.slab_simulate(
+            tuples,
+            n_photons,
+            seed,
+            n_above=float(n_above),
+            n_below=float(n_below),
+            incidence=kind,
+            angle_deg=deg,
+            estimator=estimator,
+            threads=threads,
+            band=band,
+            radial=radial,
+            angular_bins=angular_bins,
+            progress=cb,
+        )
+    seconds = time.perf_counter() - start
+    return SlabResult(
+        **{k: raw[k] for k in SCALARS},
+        absorbed_per_layer=raw["absorbed_per_layer"],
+        stderr=raw["stderr"],
+        photons=raw["photons"],
+        seconds=seconds,
+        photons_per_second=raw["photons"] / seconds if seconds > 0 else math.inf,
+        threads=n_threads,
+        radial_reflectance=raw["radial_reflectance"],
+        radial_transmittance=raw["radial_transmittance"],
+        angular_reflectance=raw["angular_reflectance"],
+        angular_transmittance=raw["angular_transmittance"],
+    )
