@@ -30,7 +30,7 @@ demo: build-prod
 
 lint: setup
 	cargo fmt --all -- --check
-	cargo clippy --workspace --all-targets --release -- -D warnings
+	cargo clippy --workspace --all-targets -- -D warnings
 	$(VENV)/bin/ruff check python tests benchmarks
 
 fmt:
@@ -38,7 +38,7 @@ fmt:
 	$(VENV)/bin/ruff check --fix python tests benchmarks
 
 rust-test:
-	cargo test --workspace --release
+	cargo test --workspace
 
 py-test: build-prod
 	$(VENV)/bin/pytest -q

@@ -25,5 +25,8 @@ def phase_sample_cos(
     n: int, g: float, fd: float = 0.0, lobes: list[tuple[float, float]] | None = None, seed: int = 0
 ) -> list[float]: ...
 def phase_eval(
-    cos_theta: list[float], g: float, fd: float = 0.0, lobes: list[tuple[float, float]] | None = None
+    cos_theta: list[float],
+    g: float,
+    fd: float = 0.0,
+    lobes: list[tuple[float, float]] | None = None,
 ) -> list[float]: ...

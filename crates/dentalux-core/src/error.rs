@@ -43,8 +43,16 @@ pub fn check_range(
     }
     let l = if lo_open { "(" } else { "[" };
     let r = if hi_open { ")" } else { "]" };
-    let hi_s = if hi.is_infinite() { "inf".to_string() } else { format!("{hi}") };
-    let unit_s = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+    let hi_s = if hi.is_infinite() {
+        "inf".to_string()
+    } else {
+        format!("{hi}")
+    };
+    let unit_s = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
     Err(Error::InvalidInput(format!(
         "{field} = {value} is out of range: allowed {l}{lo}, {hi_s}{r}{unit_s}"
     )))

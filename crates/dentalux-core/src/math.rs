@@ -56,7 +56,11 @@ pub fn rotate_direction(d: Vec3, cos_theta: f64, cos_phi: f64, sin_phi: f64) -> 
     let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
     let (ux, uy, uz) = (d.x, d.y, d.z);
     if uz.abs() > 0.999_999 {
-        return Vec3::new(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta * uz.signum());
+        return Vec3::new(
+            sin_theta * cos_phi,
+            sin_theta * sin_phi,
+            cos_theta * uz.signum(),
+        );
     }
     let tmp = (1.0 - uz * uz).sqrt();
     let st_t = sin_theta / tmp;
@@ -91,7 +95,12 @@ mod tests {
 
     #[test]
     fn rotation_keeps_unit_length_and_cosine() {
-        for d in [Vec3::new(0.3, -0.4, 0.866).normalize(), Vec3::Z, -Vec3::Z, Vec3::X] {
+        for d in [
+            Vec3::new(0.3, -0.4, 0.866).normalize(),
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+        ] {
             let (s, c) = 0.7f64.sin_cos();
             let w = rotate_direction(d, -0.25, c, s);
             assert!((w.length() - 1.0).abs() < 1e-12);

@@ -26,14 +26,43 @@ impl Medium {
         eta: f64,
         phase: PhaseFunction,
     ) -> Result<Self> {
-        check_range(&format!("{name}mua"), sigma_a, 0.0, false, f64::INFINITY, true, "1/mm")?;
-        check_range(&format!("{name}mus"), sigma_s, 0.0, false, f64::INFINITY, true, "1/mm")?;
-        check_range(&format!("{name}n"), eta, 1.0, false, f64::INFINITY, true, "")?;
+        check_range(
+            &format!("{name}mua"),
+            sigma_a,
+            0.0,
+            false,
+            f64::INFINITY,
+            true,
+            "1/mm",
+        )?;
+        check_range(
+            &format!("{name}mus"),
+            sigma_s,
+            0.0,
+            false,
+            f64::INFINITY,
+            true,
+            "1/mm",
+        )?;
+        check_range(
+            &format!("{name}n"),
+            eta,
+            1.0,
+            false,
+            f64::INFINITY,
+            true,
+            "",
+        )?;
         phase.validate().map_err(|e| match e {
             crate::Error::InvalidInput(m) => crate::Error::InvalidInput(format!("{name}{m}")),
             other => other,
         })?;
-        Ok(Self { sigma_a, sigma_s, eta, phase })
+        Ok(Self {
+            sigma_a,
+            sigma_s,
+            eta,
+            phase,
+        })
     }
 
     /// Extinction σt = σa + σs [1/mm] (eq. 1).

@@ -106,7 +106,10 @@ impl PhaseFunction {
                 "lobes: weights sum to {total}, they must sum to 1"
             )));
         }
-        Ok(PhaseFunction::MultiLobe { lobes, count: pairs.len() })
+        Ok(PhaseFunction::MultiLobe {
+            lobes,
+            count: pairs.len(),
+        })
     }
 
     /// Check the parameters of an already built phase function.
@@ -130,9 +133,10 @@ impl PhaseFunction {
             PhaseFunction::Isotropic => INV_4PI,
             PhaseFunction::HenyeyGreenstein { g } => hg(g, cos_theta),
             PhaseFunction::HgIsotropic { g, fd } => fd * INV_4PI + (1.0 - fd) * hg(g, cos_theta),
-            PhaseFunction::MultiLobe { lobes, count } => {
-                lobes[..count].iter().map(|l| l.weight * hg(l.g, cos_theta)).sum()
-            }
+            PhaseFunction::MultiLobe { lobes, count } => lobes[..count]
+                .iter()
+                .map(|l| l.weight * hg(l.g, cos_theta))
+                .sum(),
         }
     }
 
@@ -199,9 +203,10 @@ impl PhaseFunction {
             PhaseFunction::HgIsotropic { g, fd } => {
                 fd * 0.5 * (mu + 1.0) + (1.0 - fd) * hg_cdf(g, mu)
             }
-            PhaseFunction::MultiLobe { lobes, count } => {
-                lobes[..count].iter().map(|l| l.weight * hg_cdf(l.g, mu)).sum()
-            }
+            PhaseFunction::MultiLobe { lobes, count } => lobes[..count]
+                .iter()
+                .map(|l| l.weight * hg_cdf(l.g, mu))
+                .sum(),
         }
     }
 }
@@ -296,7 +301,9 @@ mod tests {
         assert!(PhaseFunction::hg_with_isotropic(0.5, 1.5).is_err());
         assert!(PhaseFunction::multi_lobe(&[(0.5, 0.9)]).is_err());
         assert!(PhaseFunction::multi_lobe(&[]).is_err());
-        assert!(PhaseFunction::HenyeyGreenstein { g: f64::NAN }.validate().is_err());
+        assert!(PhaseFunction::HenyeyGreenstein { g: f64::NAN }
+            .validate()
+            .is_err());
     }
 
     #[test]

@@ -59,8 +59,10 @@ mod tests {
         let mut s = Stream::new(3, 0, 0);
         let n = 200_000;
         let sigma_t = 2.5;
-        let mean: f64 =
-            (0..n).map(|_| sample_exponential(s.uniform_open0(), sigma_t)).sum::<f64>() / n as f64;
+        let mean: f64 = (0..n)
+            .map(|_| sample_exponential(s.uniform_open0(), sigma_t))
+            .sum::<f64>()
+            / n as f64;
         // variance of Exp(σt) is 1/σt²
         assert!((mean - 1.0 / sigma_t).abs() < 4.0 / sigma_t / (n as f64).sqrt());
         assert!(sample_exponential(0.5, 0.0).is_infinite());
@@ -70,7 +72,10 @@ mod tests {
     fn cosine_hemisphere_mean_cosine_is_two_thirds() {
         let mut s = Stream::new(4, 0, 0);
         let n = 200_000;
-        let mean: f64 = (0..n).map(|_| cosine_hemisphere(s.uniform2()).z).sum::<f64>() / n as f64;
+        let mean: f64 = (0..n)
+            .map(|_| cosine_hemisphere(s.uniform2()).z)
+            .sum::<f64>()
+            / n as f64;
         // E[cos] = 2/3, Var = 1/2 - 4/9 = 1/18
         assert!((mean - 2.0 / 3.0).abs() < 4.0 * (1.0 / 18.0 / n as f64).sqrt());
     }

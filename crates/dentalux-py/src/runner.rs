@@ -30,7 +30,9 @@ where
     F: FnOnce(&Control) -> dentalux_core::Result<T> + Send,
 {
     if threads == Some(0) {
-        return Err(PyValueError::new_err("threads = 0 is out of range: allowed ≥ 1"));
+        return Err(PyValueError::new_err(
+            "threads = 0 is out of range: allowed ≥ 1",
+        ));
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
@@ -79,7 +81,9 @@ where
                 .cloned()
                 .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
                 .unwrap_or_else(|| "unknown panic".into());
-            Err(PyRuntimeError::new_err(format!("internal error in dentalux core: {msg}")))
+            Err(PyRuntimeError::new_err(format!(
+                "internal error in dentalux core: {msg}"
+            )))
         }
     }
 }

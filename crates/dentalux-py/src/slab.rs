@@ -12,7 +12,12 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// Phase function from g, f_d and optional (weight, g) lobes; `name` prefixes errors.
-pub fn phase_from(name: &str, g: f64, fd: f64, lobes: Option<Vec<(f64, f64)>>) -> PyResult<PhaseFunction> {
+pub fn phase_from(
+    name: &str,
+    g: f64,
+    fd: f64,
+    lobes: Option<Vec<(f64, f64)>>,
+) -> PyResult<PhaseFunction> {
     let p = match lobes {
         Some(l) if !l.is_empty() => PhaseFunction::multi_lobe(&l),
         _ => PhaseFunction::hg_with_isotropic(g, fd),

@@ -133,7 +133,10 @@ pub struct SlabResult {
 impl SlabResult {
     /// Mean of the scalar named `key` (one of [`SCALAR_KEYS`]).
     pub fn get(&self, key: &str) -> Option<f64> {
-        SCALAR_KEYS.iter().position(|k| *k == key).map(|i| self.values[i])
+        SCALAR_KEYS
+            .iter()
+            .position(|k| *k == key)
+            .map(|i| self.values[i])
     }
 }
 
@@ -141,20 +144,46 @@ impl SlabConfig {
     /// Check every field; messages name the field and its allowed range.
     pub fn validate(&self) -> Result<()> {
         if self.layers.is_empty() {
-            return Err(Error::InvalidInput("layers: at least one layer is needed".into()));
+            return Err(Error::InvalidInput(
+                "layers: at least one layer is needed".into(),
+            ));
         }
         for (i, l) in self.layers.iter().enumerate() {
             let name = format!("layers[{i}].");
-            Medium::new(&name, l.medium.sigma_a, l.medium.sigma_s, l.medium.eta, l.medium.phase)?;
-            check_range(&format!("{name}thickness"), l.thickness, 0.0, true, f64::INFINITY, true, "mm")?;
+            Medium::new(
+                &name,
+                l.medium.sigma_a,
+                l.medium.sigma_s,
+                l.medium.eta,
+                l.medium.phase,
+            )?;
+            check_range(
+                &format!("{name}thickness"),
+                l.thickness,
+                0.0,
+                true,
+                f64::INFINITY,
+                true,
+                "mm",
+            )?;
         }
         check_range("n_above", self.n_above, 1.0, false, f64::INFINITY, true, "")?;
         check_range("n_below", self.n_below, 1.0, false, f64::INFINITY, true, "")?;
         if self.n_photons == 0 {
-            return Err(Error::InvalidInput("photons = 0 is out of range: allowed [1, 2^64)".into()));
+            return Err(Error::InvalidInput(
+                "photons = 0 is out of range: allowed [1, 2^64)".into(),
+            ));
         }
         if let Incidence::Angle(theta) = self.incidence {
-            check_range("incidence angle", theta.to_degrees(), 0.0, false, 90.0, true, "deg")?;
+            check_range(
+                "incidence angle",
+                theta.to_degrees(),
+                0.0,
+                false,
+                90.0,
+                true,
+                "deg",
+            )?;
         }
         if let Some((bins, rmax)) = self.radial {
             if bins == 0 {
@@ -224,9 +253,9 @@ pub fn simulate(cfg: &SlabConfig, control: &Control) -> Result<SlabResult> {
             for _ in 0..count {
                 photon.fill(0.0);
                 tracer.trace(&mut rng, &mut photon, &mut tally, control)?;
-                for k in 0..7 {
-                    tally.sum[k] += photon[k];
-                    tally.sumsq[k] += photon[k] * photon[k];
+                for (k, x) in photon.iter().enumerate() {
+                    tally.sum[k] += x;
+                    tally.sumsq[k] += x * x;
                 }
             }
             control.add_done(count);
@@ -280,7 +309,11 @@ impl<'a> Tracer<'a> {
             let r = (pos.x * pos.x + pos.y * pos.y).sqrt();
             let b = (r / rmax * bins as f64) as usize;
             if b < bins {
-                let v = if top { &mut t.radial_r } else { &mut t.radial_t };
+                let v = if top {
+                    &mut t.radial_r
+                } else {
+                    &mut t.radial_t
+                };
                 v[b] += w;
             }
         }
@@ -293,7 +326,13 @@ impl<'a> Tracer<'a> {
     }
 
     /// Trace one photon; its contributions go to `ph` (scalars) and `t` (profiles).
-    fn trace(&self, rng: &mut Stream, ph: &mut [f64; 7], t: &mut Tally, control: &Control) -> Result<()> {
+    fn trace(
+        &self,
+        rng: &mut Stream,
+        ph: &mut [f64; 7],
+        t: &mut Tally,
+        control: &Control,
+    ) -> Result<()> {
         let cfg = self.cfg;
         let weighted = cfg.estimator == Estimator::Weighted;
         let n_layers = cfg.layers.len() as isize;
@@ -428,7 +467,9 @@ impl<'a> Tracer<'a> {
             };
         }
         let per_area = |v: &[f64]| -> Vec<f64> {
-            let Some((bins, rmax)) = self.cfg.radial else { return vec![] };
+            let Some((bins, rmax)) = self.cfg.radial else {
+                return vec![];
+            };
             let dr = rmax / bins as f64;
             v.iter()
                 .enumerate()
@@ -453,7 +494,14 @@ mod tests {
     use super::*;
     use crate::phase::PhaseFunction;
 
-    pub(crate) fn one_layer(mua: f64, mus: f64, g: f64, n: f64, d: f64, photons: u64) -> SlabConfig {
+    pub(crate) fn one_layer(
+        mua: f64,
+        mus: f64,
+        g: f64,
+        n: f64,
+        d: f64,
+        photons: u64,
+    ) -> SlabConfig {
         SlabConfig {
             layers: vec![SlabLayer {
                 medium: Medium::new("", mua, mus, n, PhaseFunction::HenyeyGreenstein { g })
@@ -497,8 +545,14 @@ mod tests {
     #[test]
     fn same_seed_same_numbers_for_any_thread_count() {
         let cfg = one_layer(0.5, 20.0, 0.9, 1.5, 1.0, 3 * BATCH + 17);
-        let pool1 = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        let pool3 = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        let pool1 = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let pool3 = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
         let a = pool1.install(|| run(&cfg));
         let b = pool3.install(|| run(&cfg));
         assert_eq!(a, b);
@@ -519,7 +573,11 @@ mod tests {
             let r_tot = r + (1.0 - r).powi(2) * r / (1.0 - r * r);
             assert!((r_tot - 0.10853).abs() < 1e-5);
             let tol = 4.0 * res.stderr[TOT_R] + 1e-12;
-            assert!((res.values[TOT_R] - r_tot).abs() < tol, "{est:?} {:?}", res.values);
+            assert!(
+                (res.values[TOT_R] - r_tot).abs() < tol,
+                "{est:?} {:?}",
+                res.values
+            );
             assert_eq!(res.values[DIFF_T], 0.0);
             assert!((res.values[UNSC_T] - (1.0 - r_tot)).abs() < tol);
         }
@@ -559,14 +617,20 @@ mod tests {
         let e = simulate(&cfg, &Control::new()).unwrap_err().to_string();
         assert!(e.contains("layers[0].thickness"), "{e}");
         let mut cfg = one_layer(1.0, 9.0, 0.75, 1.0, 0.2, 0);
-        assert!(simulate(&cfg, &Control::new()).unwrap_err().to_string().contains("photons"));
+        assert!(simulate(&cfg, &Control::new())
+            .unwrap_err()
+            .to_string()
+            .contains("photons"));
         cfg.n_photons = 10;
         cfg.layers[0].medium.sigma_a = -1.0;
         let e = simulate(&cfg, &Control::new()).unwrap_err().to_string();
         assert!(e.contains("layers[0].mua"), "{e}");
         cfg.layers[0].medium.sigma_a = 1.0;
         cfg.n_below = 0.5;
-        assert!(simulate(&cfg, &Control::new()).unwrap_err().to_string().contains("n_below"));
+        assert!(simulate(&cfg, &Control::new())
+            .unwrap_err()
+            .to_string()
+            .contains("n_below"));
     }
 
     #[test]
