@@ -20,6 +20,7 @@ pub mod integrators;
 pub mod math;
 pub mod medium;
 pub mod phase;
+pub mod photon_map;
 pub mod rng;
 pub mod sampling;
 
