@@ -8,6 +8,7 @@ import sys
 import typer
 
 from dentalux.cli import demo, slab
+from dentalux.cli import materials as materials_cli
 
 app = typer.Typer(
     add_completion=False,
@@ -17,6 +18,7 @@ app = typer.Typer(
 )
 slab.register(app)
 demo.register(app)
+materials_cli.register(app)
 
 
 class UserError(Exception):
