@@ -9,6 +9,8 @@ import typer
 
 from dentalux.cli import demo, slab
 from dentalux.cli import materials as materials_cli
+from dentalux.cli import plot as plot_cli
+from dentalux.cli import shade as shade_cli
 
 app = typer.Typer(
     add_completion=False,
@@ -19,6 +21,8 @@ app = typer.Typer(
 slab.register(app)
 demo.register(app)
 materials_cli.register(app)
+shade_cli.register(app)
+plot_cli.register(app)
 
 
 class UserError(Exception):

@@ -1,0 +1,27 @@
+"""``dentalux plot``: figures (matplotlib), saved as PNG and SVG."""
+
+from __future__ import annotations
+
+import json
+
+import typer
+
+from dentalux import plots
+
+FIGURES = {"spd": plots.fig2_spd}
+
+
+def plot_command(
+    figure: str = typer.Argument(..., help="which figure: spd (the paper's Fig. 2)"),
+    out: str = typer.Option(".", help="output directory"),
+    as_json: bool = typer.Option(False, "--json", help="print the written paths as JSON"),
+) -> None:
+    """Draw a figure and write it as PNG and SVG into --out."""
+    if figure not in FIGURES:
+        raise ValueError(f"figure = {figure!r}: allowed {', '.join(FIGURES)}")
+    paths = FIGURES[figure](out)
+    print(json.dumps(paths) if as_json else "\n".join(paths.values()))
+
+
+def register(app: typer.Typer) -> None:
+    app.command("plot")(plot_command)

@@ -1,0 +1,250 @@
+"""Dental colour metrics of a disc: what a spectrophotometer reads off a specimen.
+
+A disc (thickness d [mm]) of a material lies on a backing (a Lambertian reflector with
+reflectance Rb(l): ideal black 0 and a white tile 0.9 by default) and is measured from above
+with normal illumination and all reflected light collected (specular included, SCI), under
+D65 with the CIE 1931 2 deg observer. For every band the slab simulator gives
+
+- R1, T1: total reflectance and transmittance of the disc for the normal beam from above;
+- R2, T2: total reflectance back down and transmittance up for diffuse (Lambertian) light
+  from below (the disc flipped, lit diffusely),
+
+and the backing is added by the adding (geometric series) formula
+
+    R(Rb) = R1 + T1 Rb T2 / (1 - Rb R2).
+
+This is exact for a laterally infinite disc on an ideal Lambertian backing: a Lambertian
+backing sends back a Lambertian distribution whatever it receives, so only the disc's response
+to Lambertian light from below is needed. It is not exact for a finite aperture and spot
+(light lost sideways, which lowers TP as the aperture shrinks), nor for a glossy or
+non-Lambertian backing. ``contact=None`` is an air gap (disc in air on both faces);
+``contact=n_c`` is optical contact through a coupling medium of index n_c (e.g. 1.47,
+glycerin; n_c equal to the disc's n removes the lower interface); Rb is then the backing's
+reflectance as seen from inside that medium.
+
+Metrics: CIELAB over black, over white and in transmission (the disc's total transmittance
+for the normal beam, disc in air, against a perfect transmitter); TP = ΔE*ab(black, white);
+TP00 = ΔE00(black, white); CR = Y_black / Y_white; OP = sqrt(Δa*² + Δb*²) between the
+transmitted colour and the colour reflected over black. Monte Carlo standard errors are
+propagated to every metric by the delta method (first-order, numerical derivatives with
+respect to each band's R1, T1, R2, T2, T; the small within-run covariance of R and T is
+neglected).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from dentalux.color import delta_e00, delta_e76, system
+from dentalux.progress import bar
+from dentalux.slab import Layer, simulate
+from dentalux.spectra import Reconstruction, resolve_bands
+
+PT, AT = 0.8, 1.8  # ΔE00 50:50 % perceptibility / acceptability (Paravina et al. 2015)
+TPT, TAT = 0.62, 2.62  # ΔTP00 50:50 % perceptibility / acceptability thresholds
+JSON_KEYS = ("lab_black", "lab_white", "lab_transmitted", "tp", "tp00", "cr", "op")
+DEFAULT_PHOTONS = 10_000
+
+
+@dataclass
+class DentalMetrics:
+    """Colour numbers of a disc, each scalar with its Monte Carlo standard error in ``stderr``."""
+
+    material: str
+    thickness: float
+    lab_black: list[float]
+    lab_white: list[float]
+    lab_transmitted: list[float]
+    tp: float
+    tp00: float
+    cr: float
+    op: float
+    stderr: dict[str, float]
+    wavelengths_nm: list[float]
+    spectra: dict[str, list[float]] = field(default_factory=dict)
+    photons: int = 0
+    seconds: float = 0.0
+
+    def to_json(self) -> dict:
+        """The ``dentalux shade --json`` keys."""
+        d = asdict(self)
+        return {k: d[k] for k in JSON_KEYS}
+
+
+def _resolve_material(material):
+    if hasattr(material, "at"):
+        return material
+    if isinstance(material, (str, Path)):
+        from dentalux import materials
+
+        p = Path(material)
+        if p.suffix == ".toml" or p.is_file():
+            if not p.is_file():
+                raise FileNotFoundError(f"material file not found: {p}")
+            found = materials.load(p)
+            if len(found) != 1:
+                raise ValueError(
+                    f"material file {p} holds {len(found)} materials ({', '.join(found)}): "
+                    "give one by name"
+                )
+            return next(iter(found.values()))
+        return materials.get(str(material))
+    raise ValueError(f"material = {material!r}: expected a Material, a name or a TOML path")
+
+
+def backing_spectrum(backing, bands: np.ndarray, name: str) -> np.ndarray:
+    """A backing reflectance: a number, (wavelengths_nm, values) or a callable of l [nm]."""
+    if callable(backing):
+        r = np.asarray([backing(float(w)) for w in bands], dtype=float)
+    elif isinstance(backing, tuple) and len(backing) == 2:
+        wl, val = (np.asarray(x, dtype=float) for x in backing)
+        r = np.interp(bands, wl, val)
+    else:
+        try:
+            r = np.full(len(bands), float(backing))
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} = {backing!r}: expected a reflectance in [0, 1]") from None
+    if not np.all(np.isfinite(r)) or np.any(r < 0) or np.any(r > 1):
+        raise ValueError(f"{name}: reflectance must lie in [0, 1], got {r.min()}..{r.max()}")
+    return r
+
+
+def over_backing(r1, t1, r2, t2, rb):
+    """Reflectance of a disc on a Lambertian backing rb (adding formula, see module doc)."""
+    return r1 + t1 * rb * t2 / (1.0 - rb * r2)
+
+
+def _colour(r1, t1, r2, t2, tt, rb_black, rb_white, cs, rec, op_backing):
+    """Vectorised metrics: inputs (..., bands) -> dict of arrays (...)."""
+    r_b = over_backing(r1, t1, r2, t2, rb_black)
+    r_w = over_backing(r1, t1, r2, t2, rb_white)
+    xyz_b, xyz_w, xyz_t = (cs.grid_to_XYZ(rec(s)) for s in (r_b, r_w, tt))
+    lab_b, lab_w, lab_t = (cs.XYZ_to_Lab(x) for x in (xyz_b, xyz_w, xyz_t))
+    lab_r = lab_b if op_backing == "black" else lab_w
+    return {
+        "lab_black": lab_b,
+        "lab_white": lab_w,
+        "lab_transmitted": lab_t,
+        "tp": delta_e76(lab_b, lab_w),
+        "tp00": delta_e00(lab_b, lab_w),
+        "cr": xyz_b[..., 1] / xyz_w[..., 1],
+        "op": np.hypot(lab_t[..., 1] - lab_r[..., 1], lab_t[..., 2] - lab_r[..., 2]),
+    }
+
+
+def metrics(material, thickness: float, bands="full", backing_black=0.0, backing_white=0.9,
+            contact: float | None = None, photons: int = DEFAULT_PHOTONS, seed: int = 1,
+            estimator: str = "weighted", illuminant: str = "D65", observer: str = "2",
+            op_backing: str = "black", reconstruction: str = "hold", threads: int | None = None,
+            progress: bool | None = False) -> DentalMetrics:
+    """Colour metrics of a ``thickness`` [mm] disc of ``material`` (see module doc).
+
+    ``material``: a Material (anything with ``.at(l)`` giving mua, mus, g, fd, n), a library
+    name or a TOML file path. ``bands``: 'full' (380-780 nm every 10 nm), 'paper' or a list
+    [nm]. ``photons`` per band and run (2 runs per band in an air gap, 3 in contact).
+    ``reconstruction``: extrapolation basis outside the bands ('hold' or 'zero').
+    """
+    mat = _resolve_material(material)
+    if isinstance(thickness, bool) or not (float(thickness) > 0 and np.isfinite(thickness)):
+        raise ValueError(f"thickness = {thickness!r}: must be a finite number > 0 [mm]")
+    if contact is not None and not (float(contact) >= 1.0):
+        raise ValueError(f"contact = {contact!r}: refractive index of the coupling medium >= 1")
+    if op_backing not in ("black", "white"):
+        raise ValueError(f"op_backing = {op_backing!r}: allowed 'black' or 'white'")
+    wl = resolve_bands(bands)
+    rb_black = backing_spectrum(backing_black, wl, "backing_black")
+    rb_white = backing_spectrum(backing_white, wl, "backing_white")
+    cs = system(illuminant, str(observer))
+    rec = Reconstruction(wl, grid=cs.wavelengths, basis=reconstruction)
+    n_below = 1.0 if contact is None else float(contact)
+    runs = 2 if contact is None else 3
+    vals = np.zeros((5, len(wl)))
+    errs = np.zeros((5, len(wl)))
+    start = time.perf_counter()
+    with bar(len(wl) * runs, "bands", progress) as cb:
+        for k, lam in enumerate(wl):
+            o = mat.at(float(lam))
+            layer = Layer(mua=float(o.mua), mus=float(o.mus), g=float(o.g), n=float(o.n),
+                          thickness=float(thickness), fd=float(o.fd))
+            common = dict(n_photons=int(photons), estimator=estimator, threads=threads)
+            a = simulate([layer], seed=seed, band=k, n_above=1.0, n_below=n_below, **common)
+            b = simulate([layer], seed=seed, band=100_000 + k, n_above=n_below, n_below=1.0,
+                         incidence="diffuse", **common)
+            c = a
+            if contact is not None:
+                c = simulate([layer], seed=seed, band=200_000 + k, **common)
+            for i, (res, key) in enumerate(((a, "total_reflectance"), (a, "total_transmittance"),
+                                            (b, "total_reflectance"), (b, "total_transmittance"),
+                                            (c, "total_transmittance"))):
+                vals[i, k] = getattr(res, key)
+                errs[i, k] = res.stderr[key]
+            if cb:
+                cb((k + 1) * runs)
+    seconds = time.perf_counter() - start
+    # delta method: perturb each input of each band by h, one row per perturbation
+    h = 1e-6
+    n_in = vals.size
+    batch = np.broadcast_to(vals, (1 + n_in,) + vals.shape).copy()
+    idx = np.arange(n_in)
+    batch.reshape(1 + n_in, -1)[1 + idx, idx] += h
+    out = _colour(*(batch[:, i] for i in range(5)), rb_black, rb_white, cs, rec, op_backing)
+    sig = errs.ravel()
+    stderr = {}
+    for key in ("tp", "tp00", "cr", "op"):
+        d = (out[key][1:] - out[key][0]) / h
+        stderr[key] = float(np.sqrt(np.sum((d * sig) ** 2)))
+    for key in ("lab_black", "lab_white", "lab_transmitted"):
+        d = (out[key][1:] - out[key][0]) / h
+        for j, c in enumerate("Lab"):
+            stderr[f"{key}.{c}"] = float(np.sqrt(np.sum((d[:, j] * sig) ** 2)))
+    spectra = {
+        "r1": vals[0], "t1": vals[1], "r2": vals[2], "t2": vals[3], "transmitted": vals[4],
+        "over_black": over_backing(*vals[:4], rb_black),
+        "over_white": over_backing(*vals[:4], rb_white),
+    }
+    return DentalMetrics(
+        material=str(getattr(mat, "name", "material")),
+        thickness=float(thickness),
+        lab_black=out["lab_black"][0].tolist(),
+        lab_white=out["lab_white"][0].tolist(),
+        lab_transmitted=out["lab_transmitted"][0].tolist(),
+        tp=float(out["tp"][0]),
+        tp00=float(out["tp00"][0]),
+        cr=float(out["cr"][0]),
+        op=float(out["op"][0]),
+        stderr=stderr,
+        wavelengths_nm=wl.tolist(),
+        spectra={k: np.asarray(v).tolist() for k, v in spectra.items()},
+        photons=int(photons) * runs * len(wl),
+        seconds=seconds,
+    )
+
+
+def verdict(delta_e: float) -> str:
+    """ΔE00 against the 50:50 % thresholds: imperceptible (< 0.8), acceptable (<= 1.8),
+    unacceptable."""
+    if delta_e < PT:
+        return "imperceptible"
+    return "acceptable" if delta_e <= AT else "unacceptable"
+
+
+def translucency_verdict(delta_tp00: float) -> str:
+    """ΔTP00 against 0.62 / 2.62: imperceptible, acceptable, unacceptable."""
+    if delta_tp00 < TPT:
+        return "imperceptible"
+    return "acceptable" if delta_tp00 <= TAT else "unacceptable"
+
+
+def compare(sample: DentalMetrics, reference: DentalMetrics, backing: str = "white") -> dict:
+    """ΔE00 (over the given backing) and ΔTP00 of ``sample`` against ``reference``."""
+    if backing not in ("black", "white"):
+        raise ValueError(f"backing = {backing!r}: allowed 'black' or 'white'")
+    key = f"lab_{backing}"
+    de = float(delta_e00(getattr(sample, key), getattr(reference, key)))
+    dtp = float(abs(sample.tp00 - reference.tp00))
+    return {"delta_e00": de, "delta_tp00": dtp, "verdict": verdict(de),
+            "translucency_verdict": translucency_verdict(dtp)}
