@@ -8,6 +8,7 @@ import sys
 import typer
 
 from dentalux.cli import demo, slab
+from dentalux.cli import fit as fit_cli
 from dentalux.cli import materials as materials_cli
 from dentalux.cli import plot as plot_cli
 from dentalux.cli import shade as shade_cli
@@ -23,6 +24,7 @@ demo.register(app)
 materials_cli.register(app)
 shade_cli.register(app)
 plot_cli.register(app)
+fit_cli.register(app)
 
 
 class UserError(Exception):

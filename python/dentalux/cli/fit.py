@@ -1,0 +1,91 @@
+"""``dentalux fit``: measured TT and TR of a disc -> absorption and scattering coefficients."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from dentalux.inverse import fit, fit_table, write_spectrum_toml
+
+
+def _print_results(results) -> None:
+    table = Table(title=f"inversion ({results[0].model})")
+    for col in ("λ [nm]", "TT", "TR", "μa [1/mm]", "μa interval", "μs [1/mm]", "μs interval",
+                "μs' [1/mm]", "fit TT", "fit TR", "residual"):
+        table.add_column(col, justify="right")
+    for r in results:
+        mua = f"{r.mua:.4g}" if r.mua_resolved else f"≤ {r.mua_upper_bound:.3g}"
+        table.add_row(
+            "" if r.wavelength_nm is None else f"{r.wavelength_nm:g}", f"{r.tt:.4f}",
+            f"{r.tr:.4f}", mua, f"[{r.mua_ci[0]:.3g}, {r.mua_ci[1]:.3g}]", f"{r.mus:.4g}",
+            f"[{r.mus_ci[0]:.3g}, {r.mus_ci[1]:.3g}]", f"{r.musp:.4g}", f"{r.fit_tt:.4f}",
+            f"{r.fit_tr:.4f}", f"{r.residual:.1e}",
+        )
+    Console().print(table)
+    for r in results:
+        for note in r.notes:
+            Console(stderr=True).print(f"note: {note}")
+
+
+def fit_command(
+    tt: float = typer.Option(None, help="total transmittance (fraction)"),
+    tr: float = typer.Option(None, help="total reflectance (fraction, specular included)"),
+    n: float = typer.Option(None, help="refractive index of the sample (>= 1)"),
+    g: float = typer.Option(None, help="HG anisotropy, in (-1, 1)"),
+    thickness: float = typer.Option(None, help="sample thickness [mm]"),
+    model: str = typer.Option("mc", help="forward model: mc | ad | telegrapher | km"),
+    fd: float = typer.Option(0.0, help="isotropic fraction of eq. 10, in [0, 1]"),
+    n_outside: float = typer.Option(1.0, "--n-outside", help="refractive index around it"),
+    tr_diffuse_only: bool = typer.Option(
+        False, "--tr-diffuse-only", help="TR excludes the front-face specular reflection"),
+    tt_err: float = typer.Option(0.005, help="absolute uncertainty of TT"),
+    tr_err: float = typer.Option(0.005, help="absolute uncertainty of TR"),
+    tol: float = typer.Option(None, help="fit tolerance on TT/TR (default 0.001 for mc)"),
+    photons: int = typer.Option(400_000, help="photons per Monte Carlo evaluation (mc)"),
+    seed: int = typer.Option(1, help="random seed of the Monte Carlo evaluations (mc)"),
+    table: Path = typer.Option(None, help="CSV: wavelength_nm,tt,tr,n,g,thickness_mm[,fd,...]"),
+    out: Path = typer.Option(None, help="material spectrum TOML to write (with --table)"),
+    name: str = typer.Option(None, help="material name in the TOML (default: file stem)"),
+    as_json: bool = typer.Option(False, "--json", help="print JSON"),
+) -> None:
+    """Find μa and μs [1/mm] from total transmittance and reflectance of a disc."""
+    opts = dict(model=model, fd=fd, n_outside=n_outside, tr_diffuse_only=tr_diffuse_only,
+                tt_err=tt_err, tr_err=tr_err, tol=tol, photons=photons, seed=seed)
+    if table is not None:
+        given = [k for k, v in (("tt", tt), ("tr", tr), ("n", n), ("g", g),
+                                ("thickness", thickness)) if v is not None]
+        if given:
+            raise ValueError(f"--table reads tt, tr, n, g, thickness per row; drop --"
+                             f"{', --'.join(given)}")
+        opts.pop("fd")
+        results = fit_table(table, progress=None if not as_json else False, fd=fd, **{
+            k: v for k, v in opts.items() if k != "model"}, model=model)
+        if out is not None:
+            write_spectrum_toml(results, out, name or out.stem, source=table.name)
+        if as_json:
+            print(json.dumps([dict(r.to_json(), wavelength_nm=r.wavelength_nm)
+                              for r in results]))
+        else:
+            _print_results(results)
+            if out is not None:
+                Console().print(f"wrote {out}")
+        return
+    if out is not None:
+        raise ValueError("--out needs --table (a spectral batch)")
+    missing = [k for k, v in (("tt", tt), ("tr", tr), ("n", n), ("g", g),
+                              ("thickness", thickness)) if v is None]
+    if missing:
+        raise ValueError(f"missing --{', --'.join(missing)} (or give --table)")
+    result = fit(tt=tt, tr=tr, n=n, g=g, thickness=thickness, **opts)
+    if as_json:
+        print(json.dumps(result.to_json()))
+    else:
+        _print_results([result])
+
+
+def register(app: typer.Typer) -> None:
+    app.command("fit")(fit_command)
