@@ -13,15 +13,21 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod camera;
 pub mod control;
 pub mod error;
+pub mod film;
 pub mod fresnel;
+pub mod geometry;
 pub mod integrators;
+pub mod lights;
 pub mod math;
 pub mod medium;
 pub mod phase;
 pub mod photon_map;
 pub mod rng;
 pub mod sampling;
+pub mod scene;
+pub mod surface;
 
 pub use error::{Error, Result};

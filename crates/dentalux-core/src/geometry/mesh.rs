@@ -1,0 +1,244 @@
+//! Triangle meshes (already in world space: the scene bakes a mesh's transform into its
+//! positions), Möller–Trumbore intersection, and the topology checks a dielectric boundary
+//! needs: closed (every edge shared by exactly two triangles) and consistently oriented
+//! (each shared edge traversed once in each direction), outward normals by positive volume.
+
+use super::shapes::LocalHit;
+use super::{Aabb, Vec3};
+use std::collections::HashMap;
+
+/// An indexed triangle mesh [mm]. A triangle (a, b, c) has normal (b − a) × (c − a),
+/// outward when the triangles wind counter-clockwise seen from outside.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TriangleMesh {
+    /// Vertex positions [mm].
+    pub positions: Vec<Vec3>,
+    /// Vertex indices per triangle.
+    pub triangles: Vec<[u32; 3]>,
+    /// Optional per-vertex uv (texture coordinates).
+    pub uvs: Option<Vec<[f64; 2]>>,
+}
+
+/// What [`TriangleMesh::topology`] found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Topology {
+    /// Closed and consistently oriented.
+    Closed,
+    /// Some edge belongs to a number of triangles other than two.
+    Open {
+        /// Number of edges not shared by exactly two triangles.
+        bad_edges: usize,
+    },
+    /// Closed, but two neighbouring triangles disagree on which side is out.
+    Inconsistent {
+        /// Number of edges traversed twice in the same direction.
+        bad_edges: usize,
+    },
+}
+
+impl TriangleMesh {
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.triangles.len()
+    }
+    /// Whether the mesh has no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+    /// The three corners of triangle `i`.
+    #[inline]
+    pub fn corners(&self, i: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.triangles[i];
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
+    }
+    /// Bounds of triangle `i`.
+    pub fn triangle_bounds(&self, i: usize) -> Aabb {
+        let [a, b, c] = self.corners(i);
+        Aabb::EMPTY.grow(a).grow(b).grow(c)
+    }
+    /// Möller–Trumbore: nearest intersection with triangle `i`, t in (0, t_max). The
+    /// normal is the (non-unit) geometric normal; uv interpolates the vertex uvs, or is the
+    /// barycentric (b1, b2) when the mesh has none.
+    #[inline]
+    pub fn intersect_triangle(&self, i: usize, o: Vec3, d: Vec3, t_max: f64) -> Option<LocalHit> {
+        let [a, b, c] = self.corners(i);
+        let e1 = b - a;
+        let e2 = c - a;
+        let pv = d.cross(e2);
+        let det = e1.dot(pv);
+        if det == 0.0 {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let tv = o - a;
+        let b1 = tv.dot(pv) * inv;
+        if !(0.0..=1.0).contains(&b1) {
+            return None;
+        }
+        let qv = tv.cross(e1);
+        let b2 = d.dot(qv) * inv;
+        if b2 < 0.0 || b1 + b2 > 1.0 {
+            return None;
+        }
+        let t = e2.dot(qv) * inv;
+        if !(t > 0.0 && t < t_max) {
+            return None;
+        }
+        let uv = match &self.uvs {
+            Some(uvs) => {
+                let [ia, ib, ic] = self.triangles[i];
+                let (ua, ub, uc) = (uvs[ia as usize], uvs[ib as usize], uvs[ic as usize]);
+                let b0 = 1.0 - b1 - b2;
+                [
+                    b0 * ua[0] + b1 * ub[0] + b2 * uc[0],
+                    b0 * ua[1] + b1 * ub[1] + b2 * uc[1],
+                ]
+            }
+            None => [b1, b2],
+        };
+        Some(LocalHit {
+            t,
+            n: e1.cross(e2),
+            uv,
+        })
+    }
+    /// Closedness and orientation consistency, from directed-edge counts.
+    pub fn topology(&self) -> Topology {
+        let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(self.len() * 3);
+        for t in &self.triangles {
+            for k in 0..3 {
+                *directed.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+            }
+        }
+        let mut open = 0;
+        let mut inconsistent = 0;
+        for (&(a, b), &count) in &directed {
+            let back = directed.get(&(b, a)).copied().unwrap_or(0);
+            if count + back != 2 {
+                open += 1;
+            } else if count != 1 {
+                inconsistent += 1;
+            }
+        }
+        if open > 0 {
+            Topology::Open { bad_edges: open }
+        } else if inconsistent > 0 {
+            Topology::Inconsistent {
+                bad_edges: inconsistent / 2,
+            }
+        } else {
+            Topology::Closed
+        }
+    }
+    /// Signed enclosed volume [mm³] (divergence theorem); positive when normals point out.
+    pub fn signed_volume(&self) -> f64 {
+        (0..self.len())
+            .map(|i| {
+                let [a, b, c] = self.corners(i);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+    /// Reverse every triangle's winding (turn inward normals outward).
+    pub fn flip(&mut self) {
+        for t in &mut self.triangles {
+            t.swap(1, 2);
+        }
+    }
+    /// A UV sphere of `n_theta` × `n_phi` quads split into triangles, outward-wound
+    /// (for tests and benchmarks).
+    pub fn uv_sphere(center: Vec3, radius: f64, n_theta: usize, n_phi: usize) -> Self {
+        use std::f64::consts::PI;
+        let mut positions = vec![center + Vec3::Z * radius];
+        for i in 1..n_theta {
+            let th = PI * i as f64 / n_theta as f64;
+            for j in 0..n_phi {
+                let ph = 2.0 * PI * j as f64 / n_phi as f64;
+                positions.push(
+                    center + Vec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()) * radius,
+                );
+            }
+        }
+        positions.push(center - Vec3::Z * radius);
+        let south = (positions.len() - 1) as u32;
+        let ring = |i: usize, j: usize| (1 + (i - 1) * n_phi + j % n_phi) as u32;
+        let mut triangles = Vec::new();
+        for j in 0..n_phi {
+            triangles.push([0, ring(1, j), ring(1, j + 1)]);
+            triangles.push([south, ring(n_theta - 1, j + 1), ring(n_theta - 1, j)]);
+        }
+        for i in 1..n_theta - 1 {
+            for j in 0..n_phi {
+                let (a, b) = (ring(i, j), ring(i, j + 1));
+                let (c, d) = (ring(i + 1, j), ring(i + 1, j + 1));
+                triangles.push([a, c, d]);
+                triangles.push([a, d, b]);
+            }
+        }
+        Self {
+            positions,
+            triangles,
+            uvs: None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetra() -> TriangleMesh {
+        TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+            uvs: None,
+        }
+    }
+
+    #[test]
+    fn tetrahedron_topology_and_volume() {
+        let m = tetra();
+        assert_eq!(m.topology(), Topology::Closed);
+        assert!((m.signed_volume() - 1.0 / 6.0).abs() < 1e-12);
+        let mut open = m.clone();
+        open.triangles.pop();
+        assert!(matches!(open.topology(), Topology::Open { bad_edges: 3 }));
+        let mut bad = m.clone();
+        bad.triangles[3].swap(1, 2);
+        assert!(matches!(bad.topology(), Topology::Inconsistent { .. }));
+        let mut f = m.clone();
+        f.flip();
+        assert_eq!(f.topology(), Topology::Closed);
+        assert!(f.signed_volume() < 0.0);
+    }
+
+    #[test]
+    fn triangle_hit_and_outward_normal() {
+        let m = tetra();
+        // from below through the z = 0 face: normal points to −z
+        let h = m
+            .intersect_triangle(0, Vec3::new(0.2, 0.2, -1.0), Vec3::Z, 10.0)
+            .unwrap();
+        assert!((h.t - 1.0).abs() < 1e-12);
+        assert!(h.n.normalize().dot(-Vec3::Z) > 0.999_999);
+        assert!(m
+            .intersect_triangle(0, Vec3::new(0.8, 0.8, -1.0), Vec3::Z, 10.0)
+            .is_none());
+    }
+
+    #[test]
+    fn uv_sphere_is_closed_with_right_volume() {
+        let m = TriangleMesh::uv_sphere(Vec3::new(1.0, 2.0, 3.0), 2.0, 64, 128);
+        assert_eq!(m.topology(), Topology::Closed);
+        let exact = 4.0 / 3.0 * std::f64::consts::PI * 8.0;
+        let v = m.signed_volume();
+        assert!(
+            v > 0.0 && (v - exact).abs() / exact < 2e-3,
+            "{v} vs {exact}"
+        );
+    }
+}

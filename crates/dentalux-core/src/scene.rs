@@ -1,0 +1,649 @@
+//! The scene for one band, as plain data filled by the binding: camera, media, surface
+//! materials, shapes with their boundaries, lights — plus the BVH over every primitive.
+//!
+//! Ray offsetting: rays leaving a surface start at p ± n·[`Scene::eps`], with
+//! eps = 1e-7 × (largest |coordinate| of the scene bounds + 1 mm): about 10⁹ times the f64
+//! rounding of a coordinate, and far below any feature size a dental scene has.
+
+use crate::camera::Camera;
+use crate::error::{check_range, Error, Result};
+use crate::geometry::bvh::Bvh;
+use crate::geometry::mesh::{Topology, TriangleMesh};
+use crate::geometry::shapes::{BoxShape, Cylinder, LocalHit, Quad, Sphere};
+use crate::geometry::transform::Transform;
+use crate::geometry::{Aabb, Hit, Ray, Vec3};
+use crate::lights::Light;
+use crate::medium::Medium;
+use crate::surface::Surface;
+
+/// What a closed shape separates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Boundary {
+    /// An opaque Lambertian surface (both sides reflect).
+    Opaque {
+        /// Index into `scene.surfaces`.
+        surface: u32,
+    },
+    /// A smooth dielectric interface between two media (closed shapes only).
+    Dielectric {
+        /// Index into `scene.media` of the medium inside the shape.
+        inside: u32,
+        /// Index into `scene.media` of the medium outside (the side the normal points to).
+        outside: u32,
+    },
+}
+
+/// The geometry of one shape.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Geometry {
+    /// A sphere (object space).
+    Sphere(Sphere),
+    /// A parallelogram (object space; open).
+    Quad(Quad),
+    /// An axis-aligned box (object space).
+    Box(BoxShape),
+    /// A capped cylinder (object space).
+    Cylinder(Cylinder),
+    /// A triangle mesh, in world space.
+    Mesh(TriangleMesh),
+}
+
+/// A shape in the scene: geometry, optional object-to-world transform, boundary.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShapeInstance {
+    /// The geometry.
+    pub geometry: Geometry,
+    /// Object-to-world transform (`None` for identity; meshes are baked to world space).
+    pub transform: Option<Transform>,
+    /// What the surface separates.
+    pub boundary: Boundary,
+    /// Millimetres per unit of uv along u and v (for textures in mm).
+    pub uv_scale: [f64; 2],
+}
+
+impl ShapeInstance {
+    /// A validated shape; `field` names it in errors (e.g. `shapes[2]`). A mesh's transform
+    /// is applied to its positions here, and an inward-wound closed mesh is flipped.
+    pub fn new(
+        field: &str,
+        geometry: Geometry,
+        transform: Option<Transform>,
+        boundary: Boundary,
+    ) -> Result<Self> {
+        let positive = |k: &str, v: f64| {
+            check_range(
+                &format!("{field}.{k}"),
+                v,
+                0.0,
+                true,
+                f64::INFINITY,
+                true,
+                "mm",
+            )
+        };
+        let finite = |k: &str, v: Vec3| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(Error::InvalidInput(format!(
+                    "{field}.{k} must be finite, got {v}"
+                )))
+            }
+        };
+        let dielectric = matches!(boundary, Boundary::Dielectric { .. });
+        let mut geometry = geometry;
+        let mut transform = transform;
+        let uv_scale = match &mut geometry {
+            Geometry::Sphere(s) => {
+                finite("center", s.center)?;
+                positive("radius", s.radius)?;
+                s.uv_scale()
+            }
+            Geometry::Quad(q) => {
+                finite("corner", q.corner)?;
+                finite("u", q.u)?;
+                finite("v", q.v)?;
+                if q.area().is_nan() || q.area() <= 0.0 {
+                    return Err(Error::InvalidInput(format!(
+                        "{field}: u and v must be non-zero and not parallel"
+                    )));
+                }
+                if dielectric {
+                    return Err(Error::InvalidInput(format!(
+                        "{field}: a quad is open, so its boundary must be opaque, not dielectric"
+                    )));
+                }
+                q.uv_scale()
+            }
+            Geometry::Box(b) => {
+                finite("min", b.min)?;
+                finite("max", b.max)?;
+                for (k, lo, hi) in [
+                    ("x", b.min.x, b.max.x),
+                    ("y", b.min.y, b.max.y),
+                    ("z", b.min.z, b.max.z),
+                ] {
+                    if hi <= lo {
+                        return Err(Error::InvalidInput(format!(
+                            "{field}.max.{k} = {hi} must exceed {field}.min.{k} = {lo}"
+                        )));
+                    }
+                }
+                b.uv_scale()
+            }
+            Geometry::Cylinder(c) => {
+                finite("center", c.center)?;
+                positive("radius", c.radius)?;
+                positive("height", c.height)?;
+                c.axis = crate::lights::unit(&format!("{field}.axis"), c.axis)?;
+                c.uv_scale()
+            }
+            Geometry::Mesh(m) => {
+                if m.is_empty() {
+                    return Err(Error::InvalidInput(format!("{field}.triangles is empty")));
+                }
+                let nv = m.positions.len();
+                for (i, t) in m.triangles.iter().enumerate() {
+                    if t.iter().any(|&k| k as usize >= nv) {
+                        return Err(Error::InvalidInput(format!(
+                            "{field}.triangles[{i}] = {t:?} refers to a vertex ≥ {nv} (the number of positions)"
+                        )));
+                    }
+                }
+                for (i, p) in m.positions.iter().enumerate() {
+                    finite(&format!("positions[{i}]"), *p)?;
+                }
+                if let Some(uvs) = &m.uvs {
+                    if uvs.len() != nv {
+                        return Err(Error::InvalidInput(format!(
+                            "{field}.uvs has {} entries, positions has {nv}",
+                            uvs.len()
+                        )));
+                    }
+                }
+                if let Some(t) = transform.take() {
+                    for p in &mut m.positions {
+                        *p = t.point(*p);
+                    }
+                }
+                if dielectric {
+                    match m.topology() {
+                        Topology::Closed => {}
+                        Topology::Open { bad_edges } => {
+                            return Err(Error::InvalidInput(format!(
+                                "{field}: a dielectric boundary needs a closed mesh, but {bad_edges} edges are not shared by exactly two triangles"
+                            )))
+                        }
+                        Topology::Inconsistent { bad_edges } => {
+                            return Err(Error::InvalidInput(format!(
+                                "{field}: a dielectric boundary needs a consistently oriented mesh, but {bad_edges} edges are traversed twice in the same direction"
+                            )))
+                        }
+                    }
+                    if m.signed_volume() < 0.0 {
+                        m.flip();
+                    }
+                }
+                [1.0, 1.0]
+            }
+        };
+        let s = transform.map_or(1.0, |t| t.scale());
+        Ok(Self {
+            geometry,
+            transform,
+            boundary,
+            uv_scale: [uv_scale[0] * s, uv_scale[1] * s],
+        })
+    }
+
+    /// Number of primitives (1, or the triangle count of a mesh).
+    pub fn primitive_count(&self) -> usize {
+        match &self.geometry {
+            Geometry::Mesh(m) => m.len(),
+            _ => 1,
+        }
+    }
+
+    /// World bounds of primitive `prim`.
+    pub fn primitive_bounds(&self, prim: usize) -> Aabb {
+        let local = match &self.geometry {
+            Geometry::Sphere(s) => s.bounds(),
+            Geometry::Quad(q) => q.bounds(),
+            Geometry::Box(b) => b.bounds(),
+            Geometry::Cylinder(c) => c.bounds(),
+            Geometry::Mesh(m) => return m.triangle_bounds(prim),
+        };
+        match &self.transform {
+            Some(t) => t.bounds(&local),
+            None => local,
+        }
+    }
+
+    /// Intersect primitive `prim` with a world ray; world hit (shape index left 0).
+    #[inline]
+    pub fn intersect_primitive(&self, prim: usize, ray: &Ray, t_max: f64) -> Option<Hit> {
+        let (o, d) = match &self.transform {
+            Some(t) => (t.inv_point(ray.o), t.inv_vector(ray.d)),
+            None => (ray.o, ray.d),
+        };
+        let h: LocalHit = match &self.geometry {
+            Geometry::Sphere(s) => s.intersect(o, d, t_max),
+            Geometry::Quad(q) => q.intersect(o, d, t_max),
+            Geometry::Box(b) => b.intersect(o, d, t_max),
+            Geometry::Cylinder(c) => c.intersect(o, d, t_max),
+            Geometry::Mesh(m) => m.intersect_triangle(prim, o, d, t_max),
+        }?;
+        let n = match &self.transform {
+            Some(t) => t.normal(h.n),
+            None => h.n.normalize(),
+        };
+        Some(Hit {
+            t: h.t,
+            p: ray.at(h.t),
+            n,
+            uv: h.uv,
+            shape: 0,
+        })
+    }
+
+    /// Whether the shape is closed (everything but quads and open meshes).
+    pub fn is_closed(&self) -> bool {
+        match &self.geometry {
+            Geometry::Quad(_) => false,
+            Geometry::Mesh(m) => m.topology() == Topology::Closed,
+            _ => true,
+        }
+    }
+
+    /// Whether world point `p` lies inside this closed shape (false for open shapes).
+    pub fn contains(&self, p: Vec3) -> bool {
+        let q = self.transform.map_or(p, |t| t.inv_point(p));
+        match &self.geometry {
+            Geometry::Sphere(s) => s.contains(q),
+            Geometry::Box(b) => b.contains(q),
+            Geometry::Cylinder(c) => c.contains(q),
+            Geometry::Quad(_) => false,
+            Geometry::Mesh(m) => {
+                if m.topology() != Topology::Closed {
+                    return false;
+                }
+                // parity of crossings along an arbitrary, non-axis direction
+                let d = Vec3::new(0.5773, 0.5774, 0.5775).normalize();
+                let mut crossings = 0;
+                for i in 0..m.len() {
+                    if m.intersect_triangle(i, p, d, f64::INFINITY).is_some() {
+                        crossings += 1;
+                    }
+                }
+                crossings % 2 == 1
+            }
+        }
+    }
+}
+
+/// Everything a band's render needs.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The camera.
+    pub camera: Camera,
+    /// Media at this band (index 0 is usually air).
+    pub media: Vec<Medium>,
+    /// Surface materials.
+    pub surfaces: Vec<Surface>,
+    /// Shapes.
+    pub shapes: Vec<ShapeInstance>,
+    /// Lights.
+    pub lights: Vec<Light>,
+    /// Index into `media` of the medium the camera is in.
+    pub ambient_medium: u32,
+    /// Ray offset [mm] (see the module docs).
+    pub eps: f64,
+    prims: Vec<(u32, u32)>,
+    bvh: Bvh,
+    light_cdf: Vec<f64>,
+}
+
+impl Scene {
+    /// Assemble and validate a scene; builds the BVH.
+    pub fn new(
+        camera: Camera,
+        media: Vec<Medium>,
+        surfaces: Vec<Surface>,
+        shapes: Vec<ShapeInstance>,
+        lights: Vec<Light>,
+        ambient_medium: u32,
+    ) -> Result<Self> {
+        if media.is_empty() {
+            return Err(Error::InvalidInput(
+                "media is empty: at least the ambient medium (air) is needed".into(),
+            ));
+        }
+        if ambient_medium as usize >= media.len() {
+            return Err(Error::InvalidInput(format!(
+                "ambient_medium = {ambient_medium} is out of range: allowed [0, {}]",
+                media.len() - 1
+            )));
+        }
+        for (i, s) in surfaces.iter().enumerate() {
+            s.validate(&format!("surfaces[{i}]"))?;
+        }
+        for (i, s) in shapes.iter().enumerate() {
+            match s.boundary {
+                Boundary::Opaque { surface } => {
+                    if surface as usize >= surfaces.len() {
+                        return Err(Error::InvalidInput(format!(
+                            "shapes[{i}].boundary.surface = {surface} is out of range: {} surfaces defined",
+                            surfaces.len()
+                        )));
+                    }
+                }
+                Boundary::Dielectric { inside, outside } => {
+                    for (k, m) in [("inside", inside), ("outside", outside)] {
+                        if m as usize >= media.len() {
+                            return Err(Error::InvalidInput(format!(
+                                "shapes[{i}].boundary.{k} = {m} is out of range: {} media defined",
+                                media.len()
+                            )));
+                        }
+                    }
+                }
+            }
+        }
+        if lights.is_empty() {
+            return Err(Error::InvalidInput(
+                "lights is empty: a scene needs at least one light".into(),
+            ));
+        }
+        for (i, l) in lights.iter().enumerate() {
+            l.validate(&format!("lights[{i}]"))?;
+        }
+        let total: f64 = lights.iter().map(|l| l.power()).sum();
+        if !(total > 0.0 && total.is_finite()) {
+            return Err(Error::InvalidInput(format!(
+                "lights: total power is {total}; at least one light must emit (radiance or intensity > 0)"
+            )));
+        }
+        let mut acc = 0.0;
+        let light_cdf = lights
+            .iter()
+            .map(|l| {
+                acc += l.power() / total;
+                acc
+            })
+            .collect();
+        for (i, s) in shapes.iter().enumerate() {
+            if matches!(s.boundary, Boundary::Opaque { .. }) && s.contains(camera.position) {
+                return Err(Error::InvalidInput(format!(
+                    "camera.position lies inside shapes[{i}], which is opaque: the camera would see nothing"
+                )));
+            }
+        }
+        let mut prims = Vec::new();
+        let mut bounds = Vec::new();
+        for (i, s) in shapes.iter().enumerate() {
+            for k in 0..s.primitive_count() {
+                prims.push((i as u32, k as u32));
+                bounds.push(s.primitive_bounds(k));
+            }
+        }
+        let bvh = Bvh::build(&bounds);
+        let b = bvh.bounds();
+        let extent = if b.is_empty() {
+            0.0
+        } else {
+            b.min.abs().max(b.max.abs()).max_element()
+        };
+        let extent = lights
+            .iter()
+            .fold(extent.max(camera.position.abs().max_element()), |e, l| {
+                e.max(light_anchor(l).abs().max_element())
+            });
+        Ok(Self {
+            camera,
+            media,
+            surfaces,
+            shapes,
+            lights,
+            ambient_medium,
+            eps: 1e-7 * (extent + 1.0),
+            prims,
+            bvh,
+            light_cdf,
+        })
+    }
+
+    /// Nearest surface hit with t in (0, t_max).
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        self.bvh.nearest(ray, t_max, |i, tm| {
+            let (s, k) = self.prims[i as usize];
+            let mut h = self.shapes[s as usize].intersect_primitive(k as usize, ray, tm)?;
+            h.shape = s;
+            best = Some(h);
+            Some(h.t)
+        });
+        best
+    }
+
+    /// Whether any surface lies on the ray with t in (0, t_max).
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
+        self.bvh.any(ray, t_max, |i, tm| {
+            let (s, k) = self.prims[i as usize];
+            self.shapes[s as usize]
+                .intersect_primitive(k as usize, ray, tm)
+                .is_some()
+        })
+    }
+
+    /// Boundary of shape `shape`.
+    #[inline]
+    pub fn boundary(&self, shape: u32) -> Boundary {
+        self.shapes[shape as usize].boundary
+    }
+
+    /// World bounds of all shapes [mm] (lower, upper corner).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let b = self.bvh.bounds();
+        (b.min, b.max)
+    }
+
+    /// Reflectance ρ of an opaque hit (0 for a dielectric boundary).
+    #[inline]
+    pub fn reflectance(&self, hit: &Hit) -> f64 {
+        let s = &self.shapes[hit.shape as usize];
+        match s.boundary {
+            Boundary::Opaque { surface } => {
+                self.surfaces[surface as usize].reflectance(hit, s.uv_scale)
+            }
+            Boundary::Dielectric { .. } => 0.0,
+        }
+    }
+
+    /// Pick a light with probability proportional to its power: (index, probability).
+    #[inline]
+    pub fn pick_light(&self, u: f64) -> (usize, f64) {
+        let i = self
+            .light_cdf
+            .partition_point(|&c| c <= u)
+            .min(self.lights.len() - 1);
+        let lo = if i == 0 { 0.0 } else { self.light_cdf[i - 1] };
+        (i, self.light_cdf[i] - lo)
+    }
+
+    /// Total power Φ of all lights.
+    pub fn total_power(&self) -> f64 {
+        self.lights.iter().map(|l| l.power()).sum()
+    }
+
+    /// Nearest area light a ray sees before `t_max`: (radiance, distance).
+    #[inline]
+    pub fn emitted(&self, ray: &Ray, t_max: f64) -> Option<(f64, f64)> {
+        let mut best: Option<(f64, f64)> = None;
+        for l in &self.lights {
+            if let Some((le, t)) = l.le(ray, best.map_or(t_max, |b| b.1)) {
+                best = Some((le, t));
+            }
+        }
+        best
+    }
+
+    /// Number of primitives in the BVH.
+    pub fn primitive_count(&self) -> usize {
+        self.prims.len()
+    }
+}
+
+/// A point of a light (for the scene extent).
+fn light_anchor(l: &Light) -> Vec3 {
+    match *l {
+        Light::Quad { corner, .. } => corner,
+        Light::Disc { center, .. } => center,
+        Light::Point { position, .. } | Light::Spot { position, .. } => position,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::phase::PhaseFunction;
+
+    fn air() -> Medium {
+        Medium::new("", 0.0, 0.0, 1.0, PhaseFunction::Isotropic).unwrap()
+    }
+    fn camera() -> Camera {
+        Camera::new(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y, 40.0, 8, 8).unwrap()
+    }
+    fn point() -> Light {
+        Light::Point {
+            position: Vec3::new(0.0, 5.0, 5.0),
+            intensity: 1.0,
+        }
+    }
+    fn opaque() -> Boundary {
+        Boundary::Opaque { surface: 0 }
+    }
+    fn lamb() -> Vec<Surface> {
+        vec![Surface::Lambertian { reflectance: 0.5 }]
+    }
+
+    #[test]
+    fn transformed_sphere_hit_and_normal() {
+        let t = Transform::from_rows(
+            "t",
+            [
+                [2.0, 0.0, 0.0, 1.0],
+                [0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0],
+            ],
+        )
+        .unwrap();
+        let s = ShapeInstance::new(
+            "shapes[0]",
+            Geometry::Sphere(Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+            }),
+            Some(t),
+            opaque(),
+        )
+        .unwrap();
+        let scene = Scene::new(camera(), vec![air()], lamb(), vec![s], vec![point()], 0).unwrap();
+        // ellipsoid with semi-axis 2 along x, centred at x = 1
+        let h = scene
+            .intersect(&Ray::new(Vec3::new(10.0, 0.0, 0.0), -Vec3::X), 100.0)
+            .unwrap();
+        assert!((h.t - 7.0).abs() < 1e-12 && (h.n - Vec3::X).length() < 1e-12);
+        let (lo, hi) = scene.bounds();
+        assert!((lo - Vec3::new(-1.0, -1.0, -1.0)).length() < 1e-12);
+        assert!((hi - Vec3::new(3.0, 1.0, 1.0)).length() < 1e-12);
+        assert!(scene.occluded(&Ray::new(Vec3::new(10.0, 0.0, 0.0), -Vec3::X), 7.5));
+        assert!(!scene.occluded(&Ray::new(Vec3::new(10.0, 0.0, 0.0), -Vec3::X), 6.5));
+    }
+
+    #[test]
+    fn rejects_bad_scenes_naming_the_shape() {
+        let sphere = |r: f64, b: Boundary| {
+            ShapeInstance::new(
+                "shapes[2]",
+                Geometry::Sphere(Sphere {
+                    center: Vec3::ZERO,
+                    radius: r,
+                }),
+                None,
+                b,
+            )
+        };
+        assert!(sphere(-1.0, opaque())
+            .unwrap_err()
+            .to_string()
+            .contains("shapes[2].radius"));
+        let mut open = TriangleMesh::uv_sphere(Vec3::ZERO, 1.0, 8, 8);
+        open.triangles.pop();
+        let e = ShapeInstance::new(
+            "shapes[1]",
+            Geometry::Mesh(open),
+            None,
+            Boundary::Dielectric {
+                inside: 0,
+                outside: 0,
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("shapes[1]") && e.contains("closed"), "{e}");
+        let mut bad = TriangleMesh::uv_sphere(Vec3::ZERO, 1.0, 8, 8);
+        bad.triangles[5].swap(1, 2);
+        let e = ShapeInstance::new(
+            "shapes[3]",
+            Geometry::Mesh(bad),
+            None,
+            Boundary::Dielectric {
+                inside: 0,
+                outside: 0,
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("shapes[3]") && e.contains("oriented"), "{e}");
+        let ok = sphere(20.0, opaque()).unwrap();
+        let e = Scene::new(
+            camera(),
+            vec![air()],
+            lamb(),
+            vec![ok.clone()],
+            vec![point()],
+            0,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("camera.position") && e.contains("shapes[0]"),
+            "{e}"
+        );
+        let e = Scene::new(camera(), vec![air()], lamb(), vec![], vec![], 0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("lights"), "{e}");
+        // an inward-wound closed mesh is flipped to outward normals
+        let mut inward = TriangleMesh::uv_sphere(Vec3::ZERO, 1.0, 16, 16);
+        inward.flip();
+        let s = ShapeInstance::new(
+            "m",
+            Geometry::Mesh(inward),
+            None,
+            Boundary::Dielectric {
+                inside: 0,
+                outside: 0,
+            },
+        )
+        .unwrap();
+        let scene = Scene::new(camera(), vec![air()], lamb(), vec![s], vec![point()], 0).unwrap();
+        let h = scene
+            .intersect(&Ray::new(Vec3::new(0.05, 0.02, 5.0), -Vec3::Z), 100.0)
+            .unwrap();
+        assert!(h.n.z > 0.9);
+    }
+}
