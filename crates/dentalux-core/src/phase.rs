@@ -158,7 +158,18 @@ impl PhaseFunction {
         }
     }
 
-    /// Sample cos θ from two uniforms (u[0] picks the lobe and is reused inside it).
+    /// Whether [`Self::sample_cos`] reads `u[1]` (the choice of lobe or of the isotropic
+    /// part); a single-lobe function only needs `u[0]`, so a tracer can skip drawing `u[1]`.
+    #[inline]
+    pub fn uses_second_uniform(&self) -> bool {
+        matches!(
+            self,
+            PhaseFunction::MultiLobe { .. } | PhaseFunction::HgIsotropic { .. }
+        )
+    }
+
+    /// Sample cos θ from two uniforms: u[1] picks the lobe (or the isotropic part of
+    /// eq. 10), u[0] gives cos θ inside it.
     #[inline]
     pub fn sample_cos(&self, u: [f64; 2]) -> f64 {
         match *self {
