@@ -11,6 +11,8 @@ from dentalux.cli import demo, slab
 from dentalux.cli import fit as fit_cli
 from dentalux.cli import materials as materials_cli
 from dentalux.cli import plot as plot_cli
+from dentalux.cli import render as render_cli
+from dentalux.cli import scene as scene_cli
 from dentalux.cli import shade as shade_cli
 
 app = typer.Typer(
@@ -25,6 +27,8 @@ materials_cli.register(app)
 shade_cli.register(app)
 plot_cli.register(app)
 fit_cli.register(app)
+render_cli.register(app)
+scene_cli.register(app)
 
 
 class UserError(Exception):

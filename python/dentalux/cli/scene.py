@@ -1,0 +1,49 @@
+"""``dentalux scene check FILE [--dump]``: validate a scene and print what it resolves to."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from dentalux.cli.render import parse_bands
+from dentalux.scene.load import load_scene
+
+scene_app = typer.Typer(no_args_is_help=True, help="Scene files: validation and inspection.")
+
+
+@scene_app.command("check")
+def check_command(
+    scene_file: Path = typer.Argument(..., help="scene file (TOML)"),
+    dump: bool = typer.Option(False, "--dump", help="print the resolved scene JSON per band"),
+    bands: str = typer.Option(None, help="bands for --dump [nm] (default: the scene's)"),
+    as_json: bool = typer.Option(False, "--json", help="print the summary as JSON"),
+) -> None:
+    """Validate SCENE_FILE (exit code 2 with the key path on error) and summarise it."""
+    scene = load_scene(scene_file)
+    summary = scene.summary()
+    if dump:
+        band_list = parse_bands(bands) or scene.bands
+        print(json.dumps({
+            "summary": summary,
+            "scene": scene.description,
+            "resolved": {f"{wl:g}": scene.resolve(wl) for wl in band_list},
+        }, indent=1))
+        return
+    if as_json:
+        print(json.dumps(summary))
+        return
+    table = Table(title=f"{scene_file}: valid")
+    table.add_column("key")
+    table.add_column("value")
+    for key, value in summary.items():
+        shown = ", ".join(map(str, value)) if isinstance(value, list) else str(value)
+        table.add_row(key, shown)
+    Console().print(table)
+
+
+def register(app: typer.Typer) -> None:
+    app.add_typer(scene_app, name="scene")

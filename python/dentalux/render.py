@@ -1,0 +1,164 @@
+"""``dentalux.render``: render a scene band by band with the Rust core.
+
+Python loops over the wavelength bands; each band is one call of
+``dentalux._core.render_band(scene_json, settings_json, progress)`` (docs/render-contract.md)
+that returns a float32 (height, width) radiance image and a stats dict. The bands are stacked
+into ``RenderResult.radiance`` of shape (height, width, bands).
+
+Randomness: the core derives every stream from (seed, band, batch/tile). ``band`` in the
+settings is the wavelength rounded to the nearest nm, so a band renders the same whichever
+other bands are requested with it.
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from numbers import Real
+
+import numpy as np
+
+from dentalux import _core
+from dentalux.progress import bar
+from dentalux.scene.load import as_scene
+from dentalux.scene.resolve import Scene
+from dentalux.scene.schema import RENDER_KEYS, validate_bands, validate_settings
+
+# Settings passed through ``**options`` (the core's names, docs/render-contract.md).
+OPTIONS = ("volume_photons", "k", "radius", "step", "max_depth", "passes", "alpha",
+           "final_gather")
+# Ticks of the progress bar per band; the core's progress(done) is mapped onto them.
+TICKS = 1000
+
+
+@dataclass
+class RenderResult:
+    """radiance: float32 (height, width, bands) [W/(m^2 sr nm), up to the lights' scale];
+    bands: wavelengths [nm]; stats: timings, settings and the core's per-band stats."""
+
+    radiance: np.ndarray
+    bands: list[float]
+    stats: dict = field(default_factory=dict)
+    scene_hash: str = ""
+    settings: dict = field(default_factory=dict)
+
+
+def core_render_band():
+    """The native ``render_band``, or a clear error while the core lacks it."""
+    fn = getattr(_core, "render_band", None)
+    if fn is None:
+        raise RuntimeError(
+            "dentalux._core.render_band is not in this build; rebuild with `make build-prod`"
+        )
+    return fn
+
+
+def _resolution(resolution) -> tuple[int, int] | None:
+    """``(width, height)``, ``"WxH"`` or ``None``."""
+    if resolution is None:
+        return None
+    if isinstance(resolution, str):
+        parts = resolution.lower().split("x")
+        try:
+            w, h = (int(p) for p in parts)
+        except ValueError:
+            raise ValueError(f"resolution = {resolution!r}: expected WIDTHxHEIGHT, "
+                             "e.g. 64x48") from None
+    else:
+        try:
+            w, h = resolution
+        except (TypeError, ValueError):
+            raise ValueError(f"resolution = {resolution!r}: expected (width, height)") from None
+    for name, x in (("width", w), ("height", h)):
+        if isinstance(x, bool) or not isinstance(x, int) or x < 1:
+            raise ValueError(f"resolution {name} = {x!r}: out of range, allowed integer >= 1")
+    return int(w), int(h)
+
+
+def build_settings(scene: Scene, integrator=None, spp=None, photons=None, seed=None,
+                   threads=None, **options) -> dict:
+    """The contract settings (without ``band``): arguments override the scene's
+    ``[render]`` table, which overrides the defaults."""
+    for key in options:
+        if key not in OPTIONS:
+            close = difflib.get_close_matches(key, OPTIONS, n=1, cutoff=0.6)
+            hint = f"did you mean '{close[0]}'? " if close else ""
+            raise ValueError(f"{key}: unknown render option; {hint}(allowed: "
+                             f"{', '.join(OPTIONS)})")
+    defaults = scene.render_defaults
+    settings = {k: defaults[k] for k in RENDER_KEYS if k != "bands"}
+    settings["integrator"] = scene.default_integrator
+    given = {"integrator": integrator, "spp": spp, "photons": photons, "seed": seed,
+             **options}
+    settings.update({k: v for k, v in given.items() if v is not None})
+    settings["threads"] = threads
+    return validate_settings(settings, path="")
+
+
+def render(scene, integrator: str | None = None, spp: int | None = None,
+           photons: int | None = None, bands=None, seed: int | None = None,
+           threads: int | None = None, resolution=None, progress: bool | None = None,
+           **options) -> RenderResult:
+    """Render ``scene`` (a Scene, a dict or a TOML path) at ``bands`` [nm].
+
+    integrator: pm | path | vpm | vpm-full | volpath | ppm (default: the scene's
+    ``render.integrator``, else ``vpm`` for scenes with dielectric media and ``pm``
+    otherwise). spp: samples per pixel; photons: surface photons; seed: random seed;
+    threads: worker threads (default all cores; the image does not depend on it);
+    resolution: (width, height) or "WxH", overriding the camera's. ``options``:
+    volume_photons, k, radius [mm], step [mm], max_depth, passes, alpha, final_gather.
+    """
+    t0 = time.perf_counter()
+    sc = as_scene(scene)
+    band_list = validate_bands(sc.bands if bands is None else bands, "bands")
+    settings = build_settings(sc, integrator=integrator, spp=spp, photons=photons, seed=seed,
+                              threads=threads, **options)
+    res = _resolution(resolution) or sc.resolution
+    render_band = core_render_band()
+    w, h = res
+    # The core's progress(done) counts photons traced plus pixel samples finished.
+    work = max(1, settings["photons"] + w * h * settings["spp"]
+               + (settings["volume_photons"] if settings["integrator"] in
+                  ("vpm", "vpm-full", "ppm") else 0))
+    images, per_band, seconds = [], [], []
+    t_load = time.perf_counter() - t0
+    with bar(len(band_list) * TICKS, f"render {len(band_list)} band(s)", progress) as cb:
+        for b, wl in enumerate(band_list):
+            scene_json = sc.to_json(wl, res)
+            band_settings = {**settings, "band": int(round(wl))}
+
+            def tick(done: int, b: int = b) -> None:
+                if cb is not None:
+                    cb(b * TICKS + min(TICKS, int(TICKS * done / work)))
+
+            start = time.perf_counter()
+            image, stats = render_band(scene_json, json.dumps(band_settings),
+                                       tick if cb is not None else None)
+            seconds.append(time.perf_counter() - start)
+            image = np.asarray(image, dtype=np.float32)
+            if image.shape != (h, w):
+                raise RuntimeError(f"render_band returned an image of shape {image.shape}, "
+                                   f"expected {(h, w)}")
+            images.append(image)
+            per_band.append({"wavelength_nm": wl, **dict(stats)})
+            if cb is not None:
+                cb((b + 1) * TICKS)
+    radiance = np.stack(images, axis=-1).astype(np.float32, copy=False)
+    stats = {
+        "integrator": settings["integrator"],
+        "resolution": [w, h],
+        "threads": threads or os.cpu_count() or 1,
+        "seconds_load": t_load,
+        "seconds_per_band": seconds,
+        "seconds_total": time.perf_counter() - t0,
+        "bands": per_band,
+    }
+    for key in ("photons_emitted", "photons_stored", "surface_photons", "volume_photons"):
+        vals = [s[key] for s in per_band if isinstance(s.get(key), Real)]
+        if vals:
+            stats[f"{key}_total"] = sum(vals)
+    return RenderResult(radiance=radiance, bands=band_list, stats=stats, scene_hash=sc.hash,
+                        settings=settings)

@@ -1,0 +1,74 @@
+"""Triangle meshes from OBJ and PLY files (read with trimesh), as plain positions and
+triangles [mm] for the render contract.
+
+A mesh that bounds a dielectric medium must be closed and consistently oriented; one whose
+triangles all face inwards (negative enclosed volume) is flipped so that normals point out of
+the ``inside`` medium, which is the orientation the core assumes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from dentalux.scene.schema import SceneError
+
+SUFFIXES = (".obj", ".ply")
+
+
+@dataclass
+class MeshData:
+    """positions (N, 3) float64 [mm]; triangles (M, 3) int64; uvs (N, 2) or None."""
+
+    positions: np.ndarray
+    triangles: np.ndarray
+    uvs: np.ndarray | None = None
+
+
+def load_mesh(file: str | Path, path: str = "mesh.file") -> MeshData:
+    """Read an OBJ or PLY file; ``path`` is the scene key path used in error messages."""
+    f = Path(file)
+    if f.suffix.lower() not in SUFFIXES:
+        raise SceneError(f"{path} = '{file}': unsupported mesh format (allowed: .obj, .ply)")
+    if not f.is_file():
+        raise SceneError(f"{path} = '{file}': file not found (looked for {f.resolve()})")
+    import trimesh  # deferred: a 0.2 s import, needed only for mesh files
+
+    try:
+        mesh = trimesh.load(f, force="mesh", process=False)
+    except Exception as exc:  # trimesh raises many types for malformed files
+        raise SceneError(f"{path} = '{file}': cannot read the mesh ({exc})") from None
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise SceneError(f"{path} = '{file}': the file holds no triangles")
+    uv = getattr(mesh.visual, "uv", None)
+    uvs = None
+    if uv is not None and len(uv) == len(mesh.vertices):
+        uvs = np.asarray(uv, dtype=float)
+    return MeshData(np.asarray(mesh.vertices, dtype=float),
+                    np.asarray(mesh.faces, dtype=np.int64), uvs)
+
+
+def check_closed(data: MeshData, path: str) -> MeshData:
+    """Reject an open or inconsistently oriented mesh; flip an inward-facing one.
+
+    Closedness is judged on positions merged by coordinate, so vertices duplicated for uv
+    seams do not count as holes.
+    """
+    import trimesh
+
+    merged = trimesh.Trimesh(data.positions, data.triangles, process=True)
+    if not merged.is_watertight:
+        raise SceneError(
+            f"{path}: the mesh is open (not watertight), so it cannot bound a dielectric "
+            "medium; close it or give it an opaque surface"
+        )
+    if not merged.is_winding_consistent:
+        raise SceneError(
+            f"{path}: the mesh's triangles are inconsistently oriented, so inside and "
+            "outside are ambiguous; fix the winding (e.g. trimesh.repair.fix_winding)"
+        )
+    if merged.volume < 0:
+        return MeshData(data.positions, data.triangles[:, ::-1].copy(), data.uvs)
+    return data

@@ -1,0 +1,373 @@
+"""A validated scene, resolved one wavelength band at a time into the render contract JSON
+(``docs/render-contract.md``).
+
+Geometry (meshes, transforms, indices) does not depend on the band and is built once.
+Per band, ``Scene.resolve(wavelength_nm)`` evaluates media (numbers, spectra or material
+library names), surface reflectances and light emission (D65 by default) at that
+wavelength.
+
+Light spectra: ``spectrum = "D65"`` is the CIE D65 relative spectral power distribution
+(colour-science, 300-780 nm, 5 nm, linear interpolation) divided by its value at 560 nm, so
+it is 1.0 at 560 nm; ``"flat"`` is 1.0 everywhere; a table is used as given. A light's
+``radiance`` (or ``intensity``) multiplies that relative spectrum.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dentalux.scene import transform as tf
+from dentalux.scene.meshes import MeshData, check_closed, load_mesh
+from dentalux.scene.schema import (
+    MEDIUM_FALLBACK,
+    SceneError,
+    fail,
+    spectrum_at,
+    validate,
+)
+
+_D65: tuple[np.ndarray, np.ndarray] | None = None
+
+
+def d65_relative(wavelength_nm: float, path: str = "spectrum") -> float:
+    """CIE D65 relative spectral power at ``wavelength_nm`` [nm], 1.0 at 560 nm."""
+    global _D65
+    if _D65 is None:
+        import colour  # deferred: importing colour-science takes about a second
+
+        sd = colour.SDS_ILLUMINANTS["D65"]
+        w = np.asarray(sd.wavelengths, dtype=float)
+        v = np.asarray(sd.values, dtype=float)
+        _D65 = (w, v / float(np.interp(560.0, w, v)))
+    w, v = _D65
+    if not (w[0] <= wavelength_nm <= w[-1]):
+        raise SceneError(f"{path} = 'D65': D65 is tabulated on {w[0]:g}-{w[-1]:g} nm, not at "
+                         f"the band {wavelength_nm:g} nm; give a table instead")
+    return float(np.interp(wavelength_nm, w, v))
+
+
+def material_library():
+    """The material library module ``dentalux.materials``, or ``None`` when unavailable."""
+    try:
+        from dentalux import materials
+    except Exception:  # absent or half-written: report it where a name needs it
+        return None
+    return materials if hasattr(materials, "get") else None
+
+
+def _material_at(name: str, wavelength_nm: float, path: str) -> dict:
+    """mua, mus, g, fd, n (and lobes) of a library material at one band."""
+    lib = material_library()
+    if lib is None:
+        if name == "air":
+            return {**MEDIUM_FALLBACK, "lobes": None}
+        raise fail(path, name, "the material library (dentalux.materials) is not available, "
+                               "so material names cannot be resolved; give mua/mus/g/n")
+    try:
+        props = lib.get(name).at(float(wavelength_nm))
+    except (KeyError, ValueError, LookupError) as exc:
+        if name == "air":
+            return {**MEDIUM_FALLBACK, "lobes": None}
+        msg = exc.args[0] if exc.args else type(exc).__name__
+        raise fail(path, name, f"{msg}") from None
+    out = {k: float(getattr(props, k, MEDIUM_FALLBACK[k])) for k in MEDIUM_FALLBACK}
+    lobes = getattr(props, "lobes", None)
+    out["lobes"] = [[float(w), float(g)] for w, g in lobes] if lobes else None
+    return out
+
+
+def _check_medium_values(values: dict, path: str) -> None:
+    """Re-check numbers that came from a library or a table at this band."""
+    rules = {"mua": (0.0, math.inf), "mus": (0.0, math.inf), "g": (-1.0, 1.0),
+             "fd": (0.0, 1.0), "n": (1.0, math.inf)}
+    for key, (lo, hi) in rules.items():
+        x = values[key]
+        ok = math.isfinite(x) and lo <= x <= hi and not (key == "g" and abs(x) >= 1.0)
+        if not ok:
+            raise SceneError(f"{path}.{key} = {x!r}: out of range at this band "
+                             f"(allowed {'(' if key == 'g' else '['}{lo:g}, {hi:g}"
+                             f"{')' if key == 'g' or hi == math.inf else ']'})")
+
+
+def _file_digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _identity_or(m: np.ndarray) -> list[list[float]]:
+    return [[float(x) for x in row] for row in m]
+
+
+class Scene:
+    """A validated scene that resolves to the render contract per wavelength band.
+
+    ``description`` is the normalised dict (defaults filled), ``base_dir`` the folder that
+    relative file names (meshes, textures) are read from.
+    """
+
+    def __init__(self, description: dict, base_dir: str | Path | None = None,
+                 source: str | None = None):
+        self.description = validate(copy.deepcopy(description))
+        self.base_dir = Path(base_dir) if base_dir is not None else Path.cwd()
+        self.source = source
+        d = self.description
+        self.media_names = list(d["media"])
+        self.surface_names = list(d["surfaces"])
+        self._files: dict[str, str] = {}
+        self._images = self._load_images()
+        self._shapes = [self._shape(i, s) for i, s in enumerate(d["shapes"])]
+        self._check_camera()
+        # Resolve at every default band: unknown material names and tables that miss a
+        # band fail here, at load time, rather than mid-render.
+        for wl in d["render"]["bands"]:
+            self.resolve(wl)
+
+    # -- properties -----------------------------------------------------------------
+
+    @property
+    def resolution(self) -> tuple[int, int]:
+        """(width, height) in pixels."""
+        w, h = self.description["camera"]["resolution"]
+        return int(w), int(h)
+
+    @property
+    def bands(self) -> list[float]:
+        """The scene's default wavelength bands [nm] (``render.bands``)."""
+        return list(self.description["render"]["bands"])
+
+    @property
+    def render_defaults(self) -> dict:
+        """The scene's ``[render]`` table (defaults for ``dentalux.render``)."""
+        return dict(self.description["render"])
+
+    @property
+    def has_dielectrics(self) -> bool:
+        """Whether any shape bounds a medium (then the volume integrators apply)."""
+        return any(s["boundary"]["kind"] == "dielectric" for s in self.description["shapes"])
+
+    @property
+    def default_integrator(self) -> str:
+        """``render.integrator``, else ``vpm`` with dielectric media and ``pm`` without."""
+        given = self.description["render"]["integrator"]
+        return given or ("vpm" if self.has_dielectrics else "pm")
+
+    @property
+    def hash(self) -> str:
+        """SHA-256 of the normalised description and the bytes of every file it reads."""
+        blob = json.dumps({"description": self.description, "files": self._files},
+                          sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(blob.encode()).hexdigest()
+
+    def summary(self) -> dict:
+        """Counts and names, for ``dentalux scene check``."""
+        d = self.description
+        return {
+            "name": d["scene"]["name"],
+            "source": self.source,
+            "hash": self.hash,
+            "resolution": list(self.resolution),
+            "bands_nm": self.bands,
+            "integrator": self.default_integrator,
+            "media": self.media_names,
+            "surfaces": self.surface_names,
+            "shapes": [s["type"] for s in d["shapes"]],
+            "lights": [s["type"] for s in d["lights"]],
+            "triangles": sum(len(s["triangles"]) for s in self._shapes if s["type"] == "mesh"),
+        }
+
+    # -- geometry (band independent) ---------------------------------------------------
+
+    def _file(self, name: str) -> Path:
+        p = Path(name)
+        return p if p.is_absolute() else self.base_dir / p
+
+    def _load_images(self) -> dict[str, dict]:
+        out = {}
+        for name, s in self.description["surfaces"].items():
+            if s["type"] != "image":
+                continue
+            path = f"surfaces.{name}.file"
+            if s["file"] is None:
+                out[name] = {"width": s["width"], "height": s["height"], "data": s["data"]}
+                continue
+            f = self._file(s["file"])
+            if not f.is_file():
+                raise fail(path, s["file"], f"file not found (looked for {f.resolve()})")
+            from PIL import Image
+
+            try:
+                img = Image.open(f)
+                img.load()
+            except Exception as exc:
+                raise fail(path, s["file"], f"cannot read the image ({exc})") from None
+            grey = np.asarray(img.convert("F"), dtype=float) / 255.0
+            self._files[path] = _file_digest(f)
+            out[name] = {"width": int(grey.shape[1]), "height": int(grey.shape[0]),
+                         "data": [float(x) for x in np.clip(grey, 0, 1).ravel()]}
+        return out
+
+    def _boundary(self, b: dict) -> dict:
+        if b["kind"] == "opaque":
+            return {"kind": "opaque", "surface": self.surface_names.index(b["surface"])}
+        return {"kind": "dielectric", "inside": self.media_names.index(b["inside"]),
+                "outside": self.media_names.index(b["outside"])}
+
+    def _shape(self, i: int, s: dict) -> dict:
+        path = f"shapes[{i}]"
+        m = tf.compose(s["transform"])
+        out: dict[str, Any] = {"type": s["type"]}
+        if s["type"] == "quad":
+            corner = tf.apply_point(m, s["corner"])
+            u, v = tf.apply_vector(m, s["u"]), tf.apply_vector(m, s["v"])
+            out.update(corner=corner.tolist(), u=u.tolist(), v=v.tolist())
+        elif s["type"] == "sphere":
+            out.update(center=s["center"], radius=s["radius"])
+        elif s["type"] == "box":
+            out.update(min=s["min"], max=s["max"])
+        elif s["type"] == "cylinder":
+            axis = np.asarray(s["axis"]) / np.linalg.norm(s["axis"])
+            out.update(center=s["center"], axis=axis.tolist(), radius=s["radius"],
+                       height=s["height"])
+        elif s["type"] == "mesh":
+            if s["file"] is not None:
+                f = self._file(s["file"])
+                data = load_mesh(f, f"{path}.file")
+                self._files[f"{path}.file"] = _file_digest(f)
+            else:
+                uvs = np.asarray(s["uvs"], dtype=float) if s["uvs"] is not None else None
+                data = MeshData(np.asarray(s["positions"], dtype=float),
+                                np.asarray(s["triangles"], dtype=np.int64), uvs)
+            if s["boundary"]["kind"] == "dielectric":
+                data = check_closed(data, path)
+            out.update(positions=data.positions.tolist(), triangles=data.triangles.tolist(),
+                       uvs=None if data.uvs is None else data.uvs.tolist())
+        out["boundary"] = self._boundary(s["boundary"])
+        if s["type"] != "quad":
+            out["transform"] = _identity_or(m)
+        return out
+
+    def _contains(self, shape: dict, point: np.ndarray) -> bool:
+        """Whether ``point`` lies strictly inside a sphere, box or cylinder (meshes: no)."""
+        if shape["type"] not in ("sphere", "box", "cylinder"):
+            return False
+        p = tf.apply_point(np.linalg.inv(np.asarray(shape["transform"])), point)
+        if shape["type"] == "sphere":
+            return bool(np.linalg.norm(p - shape["center"]) < shape["radius"])
+        if shape["type"] == "box":
+            return bool(np.all(p > shape["min"]) and np.all(p < shape["max"]))
+        rel = p - np.asarray(shape["center"])
+        h = float(rel @ np.asarray(shape["axis"]))
+        radial = np.linalg.norm(rel - h * np.asarray(shape["axis"]))
+        return bool(0.0 < h < shape["height"] and radial < shape["radius"])
+
+    def _check_camera(self) -> None:
+        cam = self.description["camera"]
+        pos = np.asarray(cam["position"], dtype=float)
+        for i, shape in enumerate(self._shapes):
+            if not self._contains(shape, pos):
+                continue
+            b = self.description["shapes"][i]["boundary"]
+            if b["kind"] == "opaque":
+                raise fail("camera.position", cam["position"],
+                           f"inside the opaque shapes[{i}] ({shape['type']}); move the camera "
+                           "out of it")
+            if b["inside"] != cam["medium"] and not self._medium_ok(pos, cam["medium"]):
+                raise fail("camera.medium", cam["medium"],
+                           f"the camera is inside shapes[{i}], whose inside medium is "
+                           f"'{b['inside']}'; set camera.medium = '{b['inside']}'")
+
+    def _medium_ok(self, pos: np.ndarray, medium: str) -> bool:
+        """Whether some dielectric shape containing ``pos`` has ``medium`` inside (nesting)."""
+        for i, shape in enumerate(self._shapes):
+            b = self.description["shapes"][i]["boundary"]
+            if b["kind"] == "dielectric" and b["inside"] == medium and self._contains(shape, pos):
+                return True
+        return False
+
+    # -- per band ---------------------------------------------------------------------
+
+    def medium_at(self, name: str, wavelength_nm: float) -> dict:
+        """One medium at one band in contract form (mua, mus [1/mm], n, phase)."""
+        m = self.description["media"][name]
+        path = f"media.{name}"
+        if m["material"] is not None:
+            values = _material_at(m["material"], wavelength_nm, f"{path}.material")
+        else:
+            values = {**MEDIUM_FALLBACK, "lobes": None}
+        for key in MEDIUM_FALLBACK:
+            if m[key] is not None:
+                values[key] = spectrum_at(m[key], wavelength_nm, f"{path}.{key}")
+        if m["lobes"] is not None:
+            values["lobes"] = m["lobes"]
+        _check_medium_values(values, path)
+        return {"name": name, "mua": values["mua"], "mus": values["mus"], "n": values["n"],
+                "phase": {"g": values["g"], "fd": values["fd"], "lobes": values["lobes"]}}
+
+    def _surface_at(self, name: str, wavelength_nm: float) -> dict:
+        s = self.description["surfaces"][name]
+        path = f"surfaces.{name}"
+        if s["type"] == "lambertian":
+            return {"type": "lambertian",
+                    "reflectance": spectrum_at(s["reflectance"], wavelength_nm,
+                                               f"{path}.reflectance")}
+        if s["type"] == "checker":
+            return {"type": "checker", "a": spectrum_at(s["a"], wavelength_nm, f"{path}.a"),
+                    "b": spectrum_at(s["b"], wavelength_nm, f"{path}.b"), "size": s["size"],
+                    "mapping": s["mapping"]}
+        if s["type"] == "image":
+            img = self._images[name]
+            data = img["data"] if s["scale"] == 1.0 else \
+                [min(1.0, x * s["scale"]) for x in img["data"]]
+            return {"type": "image", "width": img["width"], "height": img["height"],
+                    "data": data, "mapping": s["mapping"]}
+        return {"type": "black"}
+
+    def _light_at(self, i: int, wavelength_nm: float) -> dict:
+        s = self.description["lights"][i]
+        path = f"lights[{i}].spectrum"
+        if s["spectrum"] == "D65":
+            rel = d65_relative(wavelength_nm, path)
+        elif s["spectrum"] == "flat":
+            rel = 1.0
+        else:
+            rel = spectrum_at(s["spectrum"], wavelength_nm, path)
+        kind = s["type"]
+        if kind == "quad":
+            return {"type": "quad", "corner": s["corner"], "u": s["u"], "v": s["v"],
+                    "radiance": s["radiance"] * rel}
+        if kind == "disc":
+            n = np.asarray(s["normal"]) / np.linalg.norm(s["normal"])
+            return {"type": "disc", "center": s["center"], "normal": n.tolist(),
+                    "radius": s["radius"], "radiance": s["radiance"] * rel}
+        if kind == "point":
+            return {"type": "point", "position": s["position"],
+                    "intensity": s["intensity"] * rel}
+        d = np.asarray(s["direction"]) / np.linalg.norm(s["direction"])
+        return {"type": "spot", "position": s["position"], "direction": d.tolist(),
+                "intensity": s["intensity"] * rel, "cone_deg": s["cone_deg"],
+                "falloff_deg": s["falloff_deg"]}
+
+    def resolve(self, wavelength_nm: float, resolution: tuple[int, int] | None = None) -> dict:
+        """The render-contract scene dict for one band [nm]."""
+        wl = float(wavelength_nm)
+        cam = self.description["camera"]
+        w, h = resolution if resolution is not None else self.resolution
+        return {
+            "camera": {"position": cam["position"], "look_at": cam["look_at"], "up": cam["up"],
+                       "fov_deg": cam["fov_deg"], "width": int(w), "height": int(h)},
+            "ambient_medium": self.media_names.index(cam["medium"]),
+            "media": [self.medium_at(n, wl) for n in self.media_names],
+            "surfaces": [self._surface_at(n, wl) for n in self.surface_names],
+            "shapes": self._shapes,
+            "lights": [self._light_at(i, wl) for i in range(len(self.description["lights"]))],
+        }
+
+    def to_json(self, wavelength_nm: float, resolution: tuple[int, int] | None = None) -> str:
+        """:meth:`resolve` as the JSON string ``render_band`` takes."""
+        return json.dumps(self.resolve(wavelength_nm, resolution), separators=(",", ":"))
