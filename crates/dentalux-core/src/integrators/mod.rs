@@ -4,3 +4,6 @@
 //!   an integrating sphere measures (total transmittance, reflectance, absorption).
 
 pub mod slab;
+pub mod photon_trace;
+pub mod transport;
+pub mod vpm;

@@ -1,0 +1,287 @@
+//! The photon pass of volume photon mapping (paper section 4, eqs. 1–10): photons leave the
+//! lights with power Φ/N, cross dielectric boundaries by the Fresnel reflect-or-refract
+//! roulette (total internal reflection included), fly freely (eq. 2), scatter or are absorbed
+//! by the albedo roulette (eqs. 3–4), turn by the medium's phase function (eqs. 7–10), and
+//! pass from medium to medium through the interfaces the scene declares.
+//!
+//! Storage rules (they must mirror what the camera pass computes by ray tracing):
+//! - volume map of medium m: every scattering event inside m, except — in [`StoreMode::Paper`]
+//!   — the first scattering event of a photon that so far only crossed boundaries by
+//!   transmission (no reflection, no earlier scattering): that single scattering is computed by
+//!   shadow rays with eqs. 12–13. [`StoreMode::All`] stores it too (`vpm-full`).
+//! - surface map: every hit on an opaque surface, except photons that arrive straight from a
+//!   light, crossing only index-matched boundaries and never scattering: those are direct light,
+//!   computed by shadow rays. Photons that went through a disc (refracted) land in the surface
+//!   map: the light under and behind translucent objects.
+//!
+//! Randomness: photon batch b uses `Stream::new(seed, band, PHOTON_STREAM | b)`; batches run in
+//! parallel (rayon) and are concatenated in batch order, so maps do not depend on threads.
+
+use crate::control::Control;
+use crate::error::Result;
+use crate::geometry::Ray;
+use crate::integrators::transport::{cross, spawn};
+use crate::math::Frame;
+use crate::photon_map::{Photon, PhotonMap};
+use crate::rng::Stream;
+use crate::sampling::{cosine_hemisphere, sample_exponential};
+use crate::scene::{Boundary, Scene};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Tag mixed into the batch index of photon streams (camera tiles use small indices).
+pub const PHOTON_STREAM: u64 = 1 << 48;
+/// Photons per batch (fixed: part of the determinism contract).
+pub const BATCH: u64 = 4096;
+/// Most interactions one photon may have before it is dropped (a guard against endless TIR
+/// loops; reported in the ledger as `cut`).
+const MAX_EVENTS: u32 = 100_000;
+
+/// Which scattering events the volume maps store.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StoreMode {
+    /// The paper: single scattering of transmitted light is ray traced, not stored (`vpm`).
+    Paper,
+    /// Every scattering event is stored (`vpm-full`): exact through refraction.
+    All,
+}
+
+/// Where the emitted power went (sums of photon powers, same units as light power Φ).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Ledger {
+    /// Power emitted by the lights (Σ over photons).
+    pub emitted: f64,
+    /// Power absorbed inside each medium (albedo roulette), indexed like `scene.media`.
+    pub absorbed_medium: Vec<f64>,
+    /// Power absorbed by opaque surfaces.
+    pub absorbed_surface: f64,
+    /// Power that left the scene.
+    pub escaped: f64,
+    /// Power of photons dropped by the event guard.
+    pub cut: f64,
+    /// Power stored in each volume map (counted once per stored event).
+    pub stored_volume: Vec<f64>,
+    /// Power stored in the surface map.
+    pub stored_surface: f64,
+}
+
+impl Ledger {
+    fn new(media: usize) -> Self {
+        Self {
+            absorbed_medium: vec![0.0; media],
+            stored_volume: vec![0.0; media],
+            ..Self::default()
+        }
+    }
+    fn add(&mut self, o: &Ledger) {
+        self.emitted += o.emitted;
+        self.absorbed_surface += o.absorbed_surface;
+        self.escaped += o.escaped;
+        self.cut += o.cut;
+        self.stored_surface += o.stored_surface;
+        for (a, b) in self.absorbed_medium.iter_mut().zip(&o.absorbed_medium) {
+            *a += b;
+        }
+        for (a, b) in self.stored_volume.iter_mut().zip(&o.stored_volume) {
+            *a += b;
+        }
+    }
+}
+
+/// The photon maps of one band.
+#[derive(Debug, Clone, Default)]
+pub struct PhotonMaps {
+    /// One volume map per medium (empty for non-scattering media), indexed like `scene.media`.
+    pub volume: Vec<PhotonMap>,
+    /// Photons on opaque surfaces.
+    pub surface: PhotonMap,
+    /// Photons emitted.
+    pub emitted: u64,
+    /// Energy bookkeeping of the pass.
+    pub ledger: Ledger,
+    /// Seconds spent tracing photons.
+    pub trace_seconds: f64,
+    /// Seconds spent building the kd-trees.
+    pub build_seconds: f64,
+}
+
+impl PhotonMaps {
+    /// Photons stored in all maps.
+    pub fn stored(&self) -> usize {
+        self.surface.len() + self.volume.iter().map(|m| m.len()).sum::<usize>()
+    }
+    /// Memory held by all maps [bytes].
+    pub fn bytes(&self) -> usize {
+        self.surface.bytes() + self.volume.iter().map(|m| m.bytes()).sum::<usize>()
+    }
+}
+
+struct BatchOut {
+    volume: Vec<Vec<Photon>>,
+    surface: Vec<Photon>,
+    ledger: Ledger,
+}
+
+/// Trace one batch of `count` photons.
+fn trace_batch(
+    scene: &Scene,
+    n_total: u64,
+    count: u64,
+    mode: StoreMode,
+    rng: &mut Stream,
+) -> BatchOut {
+    let nm = scene.media.len();
+    let mut out = BatchOut {
+        volume: vec![Vec::new(); nm],
+        surface: Vec::new(),
+        ledger: Ledger::new(nm),
+    };
+    let led = &mut out.ledger;
+    for _ in 0..count {
+        let (li, p_light) = scene.pick_light(rng.uniform());
+        let (mut ray, weight) = scene.lights[li].sample_emission(rng.uniform2(), rng.uniform2());
+        // Φ_l / (N · P(l)): every photon carries Φ_total / N for uniform emission
+        let power = weight / (p_light * n_total as f64);
+        if !(power > 0.0 && power.is_finite()) {
+            continue;
+        }
+        led.emitted += power;
+        let mut medium = scene.ambient_medium;
+        let mut scattered = false; // any scattering (volume or diffuse surface) so far
+        let mut reflected = false; // any reflection at a mismatched boundary so far
+        let mut specular = false; // any event at a mismatched boundary so far
+        let mut events = 0u32;
+        loop {
+            events += 1;
+            if events > MAX_EVENTS {
+                led.cut += power;
+                break;
+            }
+            let m = &scene.media[medium as usize];
+            let hit = scene.intersect(&ray, f64::INFINITY);
+            let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
+            let sigma_t = m.sigma_t();
+            if sigma_t > 0.0 {
+                // free flight, eq. 2
+                let s = sample_exponential(rng.uniform_open0(), sigma_t);
+                if s < t_hit {
+                    let x = ray.at(s);
+                    let single_traced = !scattered && !reflected;
+                    if mode == StoreMode::All || !single_traced {
+                        out.volume[medium as usize].push(Photon::new(x, ray.d, power));
+                        led.stored_volume[medium as usize] += power;
+                    }
+                    // scatter or absorb, eqs. 3–4
+                    if rng.uniform() >= m.albedo() {
+                        led.absorbed_medium[medium as usize] += power;
+                        break;
+                    }
+                    // new direction from the phase function, eqs. 7–10
+                    let d = m.phase.sample(ray.d, rng.uniform2(), rng.uniform());
+                    ray = Ray { o: x, d };
+                    scattered = true;
+                    continue;
+                }
+            }
+            let Some(hit) = hit else {
+                led.escaped += power;
+                break;
+            };
+            match scene.boundary(hit.shape) {
+                Boundary::Opaque { surface } => {
+                    if scattered || specular {
+                        out.surface.push(Photon::new(hit.p, ray.d, power));
+                        led.stored_surface += power;
+                    }
+                    let rho = scene.surfaces[surface as usize]
+                        .reflectance(&hit, scene.shapes[hit.shape as usize].uv_scale);
+                    if rng.uniform() >= rho {
+                        led.absorbed_surface += power;
+                        break;
+                    }
+                    // Lambertian bounce on the side the photon came from
+                    let n = if ray.d.dot(hit.n) < 0.0 {
+                        hit.n
+                    } else {
+                        -hit.n
+                    };
+                    let d = Frame::from_axis(n).to_world(cosine_hemisphere(rng.uniform2()));
+                    ray = spawn(scene, &hit, d);
+                    scattered = true;
+                }
+                Boundary::Dielectric { inside, outside } => {
+                    let c = cross(scene, &hit, ray.d, inside, outside);
+                    let refracted = if rng.uniform() < c.reflectance {
+                        None
+                    } else {
+                        c.refracted
+                    };
+                    if let Some(d) = refracted {
+                        ray = spawn(scene, &hit, d);
+                        medium = c.to;
+                    } else {
+                        ray = spawn(scene, &hit, c.reflected);
+                        reflected |= c.mismatched();
+                    }
+                    specular |= c.mismatched();
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Trace `photons` photons from the scene's lights and build the maps. `threads` batches run
+/// at a time per chunk, so transient memory stays a small multiple of one batch per thread.
+pub fn trace_photons(
+    scene: &Scene,
+    photons: u64,
+    mode: StoreMode,
+    seed: u64,
+    band: u64,
+    control: &Control,
+) -> Result<PhotonMaps> {
+    let t0 = Instant::now();
+    let nm = scene.media.len();
+    let n_batches = photons.div_ceil(BATCH);
+    let chunk = (rayon::current_num_threads() as u64 * 8).max(1);
+    let mut volume: Vec<Vec<Photon>> = vec![Vec::new(); nm];
+    let mut surface = Vec::new();
+    let mut ledger = Ledger::new(nm);
+    let mut start = 0;
+    while start < n_batches {
+        control.check()?;
+        let end = (start + chunk).min(n_batches);
+        let outs: Vec<BatchOut> = (start..end)
+            .into_par_iter()
+            .map(|b| {
+                let count = BATCH.min(photons - b * BATCH);
+                let mut rng = Stream::new(seed, band, PHOTON_STREAM | b);
+                let o = trace_batch(scene, photons, count, mode, &mut rng);
+                control.add_done(count);
+                o
+            })
+            .collect();
+        for o in outs {
+            for (v, ov) in volume.iter_mut().zip(o.volume) {
+                v.extend_from_slice(&ov);
+            }
+            surface.extend_from_slice(&o.surface);
+            ledger.add(&o.ledger);
+        }
+        start = end;
+    }
+    control.check()?;
+    let trace_seconds = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let volume: Vec<PhotonMap> = volume.into_iter().map(PhotonMap::build).collect();
+    let surface = PhotonMap::build(surface);
+    Ok(PhotonMaps {
+        volume,
+        surface,
+        emitted: photons,
+        ledger,
+        trace_seconds,
+        build_seconds: t1.elapsed().as_secs_f64(),
+    })
+}

@@ -1,0 +1,340 @@
+//! The camera pass of volume photon mapping (paper section 4, eq. 11): camera rays split at
+//! dielectric boundaries by Fresnel into reflection and refraction; inside a scattering
+//! medium they are ray marched with a jittered step Δx, adding at each step
+//! - single scattering from every light by a shadow ray attenuated by eq. 12 with the eq. 13
+//!   refraction correction of the in-medium distance (`vpm`; in `vpm-full` the photon map
+//!   carries single scattering instead),
+//! - multiple scattering from the medium's volume photon map, Σ p ΔΦ / (4/3 π r³),
+//!
+//! weighted by the transmittance e^(−σt s) from the eye; then the ray continues behind the
+//! medium (it leaves through the far boundary, refracts and meets the checker behind a disc).
+//! Opaque Lambertian surfaces take direct light by shadow rays plus the surface photon map.
+//!
+//! Radiance across a refracting boundary is scaled by (η_i/η_t)² (η_i on the camera side):
+//! photon maps measure radiance inside the medium, which is η² times the radiance outside.
+//!
+//! Parameters (defaults derived from the scene; each overridable by settings):
+//! | setting | default | meaning |
+//! |---|---|---|
+//! | `k` | 64 | photons per estimate |
+//! | `radius` [mm] | 2 · cbrt(3 k V / (4π n)) per medium: twice the radius that holds k photons at the map's mean density (V: bounding box of the map's photons, n: its photons) | largest gathering radius |
+//! | `step` Δx [mm] | per medium min(0.5 / σt, scene diagonal / 64) | ray-marching step |
+
+use crate::geometry::{Hit, Ray};
+use crate::integrators::photon_trace::{PhotonMaps, StoreMode};
+use crate::integrators::transport::{cross, eq13_transmittance, spawn, straight_transmittance};
+use crate::photon_map::{Neighbours, PhotonMap};
+use crate::rng::Stream;
+use crate::scene::{Boundary, Scene};
+use std::f64::consts::PI;
+
+/// Camera-path depth up to which a mismatched boundary splits into both reflection and
+/// refraction; deeper, one of the two is chosen by Fresnel (unbiased either way).
+const SPLIT_DEPTH: u32 = 2;
+/// Path weight below which Russian roulette starts.
+const RR_WEIGHT: f64 = 0.05;
+
+/// Settings of the camera pass; `None` means "derive from the scene".
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VpmParams {
+    /// Photons per density estimate.
+    pub k: usize,
+    /// Largest gathering radius [mm].
+    pub radius: Option<f64>,
+    /// Ray-marching step Δx [mm].
+    pub step: Option<f64>,
+    /// `Paper` (`vpm`) or `All` (`vpm-full`): who carries single scattering.
+    pub mode: StoreMode,
+    /// Guard on camera-path length (boundary events); roulette ends paths long before.
+    pub max_depth: u32,
+}
+
+impl Default for VpmParams {
+    fn default() -> Self {
+        Self {
+            k: 64,
+            radius: None,
+            step: None,
+            mode: StoreMode::Paper,
+            max_depth: 64,
+        }
+    }
+}
+
+/// Per-medium values resolved from the scene and the maps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MediumSetup {
+    /// Ray-marching step Δx [mm].
+    pub step: f64,
+    /// Largest gathering radius [mm].
+    pub radius: f64,
+}
+
+/// A ready camera pass: scene, maps and resolved parameters.
+#[derive(Debug)]
+pub struct Vpm<'a> {
+    scene: &'a Scene,
+    maps: &'a PhotonMaps,
+    params: VpmParams,
+    /// Resolved step and radius per medium (indexed like `scene.media`).
+    pub media: Vec<MediumSetup>,
+    /// Resolved radius of the surface map [mm].
+    pub surface_radius: f64,
+}
+
+/// Twice the radius of a ball holding `k` photons at the map's mean density.
+fn default_radius(map: &PhotonMap, k: usize, flat: bool) -> f64 {
+    if map.is_empty() {
+        return 1.0;
+    }
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in map.photons() {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p.pos[a]);
+            hi[a] = hi[a].max(p.pos[a]);
+        }
+    }
+    let mut e: Vec<f64> = (0..3).map(|a| (hi[a] - lo[a]) as f64).collect();
+    e.sort_by(|a, b| b.total_cmp(a));
+    let n = map.len() as f64;
+    let r = if flat {
+        // surface photons: density per area of the two largest extents
+        (k as f64 * e[0] * e[1].max(e[0] * 1e-3) / (PI * n)).sqrt()
+    } else {
+        let v = e[0] * e[1].max(e[0] * 1e-3) * e[2].max(e[0] * 1e-3);
+        (3.0 * k as f64 * v / (4.0 * PI * n)).cbrt()
+    };
+    (2.0 * r).max(1e-6)
+}
+
+impl<'a> Vpm<'a> {
+    /// Resolve the parameters for `scene` and `maps`.
+    pub fn new(scene: &'a Scene, maps: &'a PhotonMaps, params: VpmParams) -> Self {
+        let (lo, hi) = scene.bounds();
+        let diag = (hi - lo).length();
+        let diag = if diag.is_finite() && diag > 0.0 {
+            diag
+        } else {
+            1.0
+        };
+        let media = scene
+            .media
+            .iter()
+            .enumerate()
+            .map(|(i, m)| {
+                let st = m.sigma_t();
+                let step = params.step.unwrap_or(if st > 0.0 {
+                    (0.5 / st).min(diag / 64.0)
+                } else {
+                    diag / 64.0
+                });
+                let radius = params.radius.unwrap_or_else(|| {
+                    maps.volume
+                        .get(i)
+                        .map_or(1.0, |map| default_radius(map, params.k, false))
+                });
+                MediumSetup { step, radius }
+            })
+            .collect();
+        let surface_radius = params
+            .radius
+            .unwrap_or_else(|| default_radius(&maps.surface, params.k, true));
+        Self {
+            scene,
+            maps,
+            params,
+            media,
+            surface_radius,
+        }
+    }
+
+    /// Radiance arriving at the camera along `ray` (which starts in the ambient medium).
+    pub fn radiance(&self, ray: &Ray, rng: &mut Stream, nb: &mut Neighbours) -> f64 {
+        self.trace(*ray, self.scene.ambient_medium, 1.0, 0, rng, nb)
+    }
+
+    /// Follow a camera path of weight `beta` from `ray` in `medium`; `depth` counts boundary
+    /// events. Returns the radiance it carries times `beta`.
+    fn trace(
+        &self,
+        mut ray: Ray,
+        mut medium: u32,
+        mut beta: f64,
+        mut depth: u32,
+        rng: &mut Stream,
+        nb: &mut Neighbours,
+    ) -> f64 {
+        let scene = self.scene;
+        let mut l = 0.0;
+        loop {
+            let m = &scene.media[medium as usize];
+            let hit = scene.intersect(&ray, f64::INFINITY);
+            let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
+            let sigma_t = m.sigma_t();
+            // lights seen directly (they are not in the BVH and do not block)
+            if let Some((le, t)) = scene.emitted(&ray, t_hit) {
+                l += beta * le * (-sigma_t * t).exp();
+            }
+            if sigma_t > 0.0 {
+                l += beta * self.march(&ray, medium, t_hit, rng, nb);
+                beta *= (-sigma_t * t_hit).exp();
+                if beta == 0.0 {
+                    return l;
+                }
+            }
+            let Some(hit) = hit else {
+                return l;
+            };
+            depth += 1;
+            if depth > self.params.max_depth {
+                return l;
+            }
+            match scene.boundary(hit.shape) {
+                Boundary::Opaque { surface } => {
+                    let rho = scene.surfaces[surface as usize]
+                        .reflectance(&hit, scene.shapes[hit.shape as usize].uv_scale);
+                    if rho > 0.0 {
+                        l += beta * rho / PI * self.surface_irradiance(&ray, &hit, medium, rng, nb);
+                    }
+                    return l;
+                }
+                Boundary::Dielectric { inside, outside } => {
+                    let c = cross(scene, &hit, ray.d, inside, outside);
+                    let scale = (c.eta_i / c.eta_t).powi(2);
+                    match c.refracted {
+                        None => ray = spawn(scene, &hit, c.reflected),
+                        Some(t) if !c.mismatched() => {
+                            ray = spawn(scene, &hit, t);
+                            medium = c.to;
+                        }
+                        Some(t) if depth <= SPLIT_DEPTH => {
+                            // split: reflection recursively, refraction in this loop
+                            let rr = spawn(scene, &hit, c.reflected);
+                            l += self.trace(rr, c.from, beta * c.reflectance, depth, rng, nb);
+                            beta *= (1.0 - c.reflectance) * scale;
+                            ray = spawn(scene, &hit, t);
+                            medium = c.to;
+                        }
+                        Some(t) => {
+                            // choose one branch with the Fresnel probabilities
+                            if rng.uniform() < c.reflectance {
+                                ray = spawn(scene, &hit, c.reflected);
+                            } else {
+                                beta *= scale;
+                                ray = spawn(scene, &hit, t);
+                                medium = c.to;
+                            }
+                        }
+                    }
+                }
+            }
+            // Russian roulette on the path weight (unbiased; no hard depth cut)
+            if beta < RR_WEIGHT {
+                let survive = beta / RR_WEIGHT;
+                if rng.uniform() >= survive {
+                    return l;
+                }
+                beta = RR_WEIGHT;
+            }
+        }
+    }
+
+    /// ∫_0^t_end e^(−σt s) S(x(s)) ds along `ray` in `medium` by jittered steps (eq. 11):
+    /// S = σs Σ_l L_l p (single scattering, `vpm` only) + Σ p ΔΦ / (4/3 π r³).
+    fn march(
+        &self,
+        ray: &Ray,
+        medium: u32,
+        t_end: f64,
+        rng: &mut Stream,
+        nb: &mut Neighbours,
+    ) -> f64 {
+        let scene = self.scene;
+        let m = &scene.media[medium as usize];
+        if m.sigma_s <= 0.0 {
+            return 0.0;
+        }
+        let sigma_t = m.sigma_t();
+        let setup = self.media[medium as usize];
+        let dx = setup.step;
+        let map = &self.maps.volume[medium as usize];
+        let wo = -ray.d;
+        let jitter = rng.uniform();
+        let mut weight = 1.0; // Russian-roulette weight of the march's tail
+        let mut sum = 0.0;
+        let mut i = 0u64;
+        loop {
+            let s = (i as f64 + jitter) * dx;
+            if s >= t_end {
+                break;
+            }
+            i += 1;
+            // the tail of the march matters little: roulette it instead of cutting it
+            if (-sigma_t * s).exp() * weight < 1e-3 {
+                if rng.uniform() >= 0.5 {
+                    break;
+                }
+                weight *= 2.0;
+            }
+            let x = ray.at(s);
+            let mut src = 0.0;
+            if self.params.mode == StoreMode::Paper {
+                for light in &scene.lights {
+                    let Some(ls) = light.sample_li(x, rng.uniform2()) else {
+                        continue;
+                    };
+                    let t = eq13_transmittance(scene, x, ls.wi, ls.dist, medium);
+                    if t > 0.0 {
+                        src += m.sigma_s * m.phase.eval(ls.wi.dot(ray.d)) * ls.value * t;
+                    }
+                }
+            }
+            if !map.is_empty() {
+                src += map
+                    .volume_radiance(x, wo, &m.phase, self.params.k, setup.radius, nb)
+                    .value;
+            }
+            sum += (-sigma_t * s).exp() * weight * src * dx;
+        }
+        sum
+    }
+
+    /// Irradiance at an opaque hit from the side the ray came from: direct light by shadow
+    /// rays (through index-matched boundaries only) plus the surface photon map.
+    fn surface_irradiance(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+        medium: u32,
+        rng: &mut Stream,
+        nb: &mut Neighbours,
+    ) -> f64 {
+        let scene = self.scene;
+        let n = if ray.d.dot(hit.n) < 0.0 {
+            hit.n
+        } else {
+            -hit.n
+        };
+        let p = spawn(scene, hit, n).o;
+        let mut e = 0.0;
+        for light in &scene.lights {
+            let Some(ls) = light.sample_li(p, rng.uniform2()) else {
+                continue;
+            };
+            let cos = ls.wi.dot(n);
+            if cos <= 0.0 {
+                continue;
+            }
+            e += ls.value * cos * straight_transmittance(scene, p, ls.wi, ls.dist, medium);
+        }
+        if !self.maps.surface.is_empty() {
+            e += self
+                .maps
+                .surface
+                .surface_irradiance(hit.p, n, self.params.k, self.surface_radius, nb)
+                .value;
+        }
+        e
+    }
+}
