@@ -14,6 +14,7 @@ from dentalux.cli import plot as plot_cli
 from dentalux.cli import render as render_cli
 from dentalux.cli import scene as scene_cli
 from dentalux.cli import shade as shade_cli
+from dentalux.cli import tooth as tooth_cli
 
 app = typer.Typer(
     add_completion=False,
@@ -24,6 +25,7 @@ app = typer.Typer(
 slab.register(app)
 demo.register(app)
 materials_cli.register(app)
+tooth_cli.register(app)
 shade_cli.register(app)
 plot_cli.register(app)
 fit_cli.register(app)

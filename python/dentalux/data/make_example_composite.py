@@ -14,7 +14,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-
 from dentalux.slab import Layer, simulate
 
 WAVELENGTHS_NM = np.arange(400.0, 701.0, 25.0)
