@@ -47,7 +47,7 @@ from dentalux.spectra import Reconstruction, resolve_bands
 PT, AT = 0.8, 1.8  # ΔE00 50:50 % perceptibility / acceptability (Paravina et al. 2015)
 TPT, TAT = 0.62, 2.62  # ΔTP00 50:50 % perceptibility / acceptability thresholds
 JSON_KEYS = ("lab_black", "lab_white", "lab_transmitted", "tp", "tp00", "cr", "op")
-DEFAULT_PHOTONS = 10_000
+DEFAULT_PHOTONS = 20_000
 
 
 @dataclass
@@ -201,8 +201,10 @@ def metrics(material, thickness: float, bands="full", backing_black=0.0, backing
         d = (out[key][1:] - out[key][0]) / h
         for j, c in enumerate("Lab"):
             stderr[f"{key}.{c}"] = float(np.sqrt(np.sum((d[:, j] * sig) ** 2)))
+    names = ("r1", "t1", "r2", "t2", "transmitted")
     spectra = {
-        "r1": vals[0], "t1": vals[1], "r2": vals[2], "t2": vals[3], "transmitted": vals[4],
+        **{k: vals[i] for i, k in enumerate(names)},
+        **{f"{k}_stderr": errs[i] for i, k in enumerate(names)},
         "over_black": over_backing(*vals[:4], rb_black),
         "over_white": over_backing(*vals[:4], rb_white),
     }
