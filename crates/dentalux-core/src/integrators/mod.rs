@@ -7,3 +7,7 @@ pub mod slab;
 pub mod photon_trace;
 pub mod transport;
 pub mod vpm;
+pub mod volpath;
+pub mod path;
+pub mod pm;
+pub mod render;
