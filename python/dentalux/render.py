@@ -119,10 +119,11 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     res = _resolution(resolution) or sc.resolution
     render_band = core_render_band()
     w, h = res
-    # The core's progress(done) counts photons traced plus pixel samples finished.
-    work = max(1, settings["photons"] + w * h * settings["spp"]
-               + (settings["volume_photons"] if settings["integrator"] in
-                  ("vpm", "vpm-full", "ppm") else 0))
+    # The core's progress(done) counts photons traced plus pixels finished (render.rs).
+    traced = 0 if settings["integrator"] in ("path", "volpath") else settings["photons"] + (
+        settings["volume_photons"] if settings["integrator"] in ("vpm", "vpm-full", "ppm")
+        else 0)
+    work = max(1, traced * settings["passes"] + w * h)
     images, per_band, seconds = [], [], []
     t_load = time.perf_counter() - t0
     with bar(len(band_list) * TICKS, f"render {len(band_list)} band(s)", progress) as cb:

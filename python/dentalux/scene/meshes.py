@@ -27,9 +27,11 @@ class MeshData:
     uvs: np.ndarray | None = None
 
 
-def load_mesh(file: str | Path, path: str = "mesh.file") -> MeshData:
-    """Read an OBJ or PLY file; ``path`` is the scene key path used in error messages."""
-    f = Path(file)
+def load_mesh(f: Path, path: str = "mesh.file", file: str | None = None) -> MeshData:
+    """Read the OBJ or PLY file ``f``; ``path`` is the scene key path and ``file`` the name
+    as the scene gives it, both for error messages."""
+    f = Path(f)
+    file = str(f) if file is None else file
     if f.suffix.lower() not in SUFFIXES:
         raise SceneError(f"{path} = '{file}': unsupported mesh format (allowed: .obj, .ply)")
     if not f.is_file():

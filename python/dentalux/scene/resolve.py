@@ -237,7 +237,7 @@ class Scene:
         elif s["type"] == "mesh":
             if s["file"] is not None:
                 f = self._file(s["file"])
-                data = load_mesh(f, f"{path}.file")
+                data = load_mesh(f, f"{path}.file", s["file"])
                 self._files[f"{path}.file"] = _file_digest(f)
             else:
                 uvs = np.asarray(s["uvs"], dtype=float) if s["uvs"] is not None else None
