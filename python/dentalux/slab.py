@@ -146,7 +146,9 @@ def simulate(
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"seed = {seed!r} is out of range: allowed integer >= 0")
     kind, deg = parse_incidence(incidence)
-    n_threads = threads or os.cpu_count() or 1
+    # rayon's default pool follows the CPUs this process may run on
+    n_threads = threads or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                            else os.cpu_count() or 1)
     start = time.perf_counter()
     with bar(n_photons, "photons", progress) as cb:
         raw = _core.slab_simulate(

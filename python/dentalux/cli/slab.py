@@ -1,9 +1,16 @@
-"""``dentalux slab``: what a spectrophotometer measures on a layered disc."""
+"""``dentalux slab``: what a spectrophotometer measures on a layered disc.
+
+Lengths in mm, coefficients in 1/mm. ``--json`` prints one object with the contract keys of
+issue 2; ``--profiles FILE.npz`` also writes the radial profiles R(r), T(r) [1/mm^2] and the
+exit-angle histograms (fractions of the incident power per bin).
+"""
 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
+import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
@@ -12,16 +19,44 @@ from dentalux.slab import SCALARS, Layer, simulate
 
 
 def _parse_layer(spec: str, index: int) -> Layer:
+    """``mua,mus,g,n,thickness[,fd]`` -> Layer (1/mm, 1/mm, -, -, mm, -)."""
     parts = spec.split(",")
-    if len(parts) != 5:
+    if len(parts) not in (5, 6):
         raise ValueError(
-            f"--layer[{index}] = {spec!r}: expected five numbers mua,mus,g,n,thickness"
+            f"--layer[{index}] = {spec!r}: expected five numbers mua,mus,g,n,thickness "
+            "(and optionally fd)"
         )
     try:
-        mua, mus, g, n, d = (float(p) for p in parts)
+        values = [float(p) for p in parts]
     except ValueError as exc:
         raise ValueError(f"--layer[{index}] = {spec!r}: {exc}") from None
-    return Layer(mua=mua, mus=mus, g=g, n=n, thickness=d)
+    mua, mus, g, n, d = values[:5]
+    fd = values[5] if len(values) == 6 else 0.0
+    return Layer(mua=mua, mus=mus, g=g, n=n, thickness=d, fd=fd)
+
+
+def _check_profile_options(radial_bins: int, radial_max: float, angle_bins: int) -> None:
+    if radial_bins < 1:
+        raise ValueError(f"--radial-bins = {radial_bins} is out of range: allowed >= 1")
+    if not radial_max > 0 or radial_max == float("inf"):
+        raise ValueError(f"--radial-max = {radial_max} is out of range: allowed (0, inf) mm")
+    if angle_bins < 1:
+        raise ValueError(f"--angle-bins = {angle_bins} is out of range: allowed >= 1")
+
+
+def write_profiles(path: Path, result, radial_max: float, angle_bins: int) -> None:
+    """Save R(r), T(r) [1/mm^2] with ring edges [mm] and the exit-angle histograms with
+    their edges [deg] to an ``.npz`` file."""
+    bins = len(result.radial_reflectance)
+    np.savez(
+        path,
+        r_edges_mm=np.linspace(0.0, radial_max, bins + 1),
+        radial_reflectance=np.asarray(result.radial_reflectance),
+        radial_transmittance=np.asarray(result.radial_transmittance),
+        angle_edges_deg=np.linspace(0.0, 90.0, angle_bins + 1),
+        angular_reflectance=np.asarray(result.angular_reflectance),
+        angular_transmittance=np.asarray(result.angular_transmittance),
+    )
 
 
 def print_result_table(result, title: str) -> None:
@@ -49,7 +84,7 @@ def slab_command(
     thickness: float = typer.Option(None, help="layer thickness [mm]"),
     fd: float = typer.Option(0.0, help="isotropic fraction of eq. 10, in [0, 1]"),
     layer: list[str] = typer.Option(
-        None, help="mua,mus,g,n,thickness of one layer, top to bottom (repeatable)"
+        None, help="mua,mus,g,n,thickness[,fd] of one layer, top to bottom (repeatable)"
     ),
     n_above: float = typer.Option(1.0, help="refractive index above the slab"),
     n_below: float = typer.Option(1.0, help="refractive index below the slab"),
@@ -59,8 +94,15 @@ def slab_command(
     seed: int = typer.Option(1, help="random seed"),
     threads: int = typer.Option(None, help="worker threads (default: all cores)"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
+    profiles: Path = typer.Option(
+        None, help="write R(r), T(r) and exit-angle histograms to this .npz file"
+    ),
+    radial_bins: int = typer.Option(100, help="rings of the radial profiles"),
+    radial_max: float = typer.Option(10.0, help="outer radius of the radial profiles [mm]"),
+    angle_bins: int = typer.Option(18, help="exit-angle bins over [0, 90) degrees"),
 ) -> None:
     """Simulate a layered slab: reflectance, transmittance and absorption with errors."""
+    _check_profile_options(radial_bins, radial_max, angle_bins)
     if layer:
         if any(v is not None for v in (mua, mus, thickness)):
             raise ValueError("give either --layer (repeatable) or --mua/--mus/--thickness")
@@ -73,7 +115,11 @@ def slab_command(
         layers = [Layer(mua=mua, mus=mus, g=g, n=n, thickness=thickness, fd=fd)]
     result = simulate(layers, n_photons=photons, seed=seed, n_above=n_above, n_below=n_below,
                       incidence=incidence, estimator=estimator, threads=threads,
+                      radial=(radial_bins, radial_max) if profiles else None,
+                      angular_bins=angle_bins if profiles else None,
                       progress=None if not as_json else False)
+    if profiles:
+        write_profiles(profiles, result, radial_max, angle_bins)
     if as_json:
         d = result.to_dict()
         for k in ("radial_reflectance", "radial_transmittance", "angular_reflectance",
