@@ -634,3 +634,93 @@ def test_dict_input_is_not_modified():
     before = copy.deepcopy(d)
     scene_from_dict(d).resolve(540)
     assert d == before
+
+
+# ---------------------------------------------------------------------------------------
+# Real renders through the Rust core (once dentalux._core.render_band exists)
+
+needs_core = pytest.mark.skipif(not HAS_CORE, reason="dentalux._core.render_band not built")
+
+
+@needs_core
+def test_cornell_render_is_deterministic():
+    """Same seed, same image, for 1 and 2 threads; another seed, another image."""
+    kw = dict(spp=2, photons=4000, bands=[540.0], resolution=(20, 20), progress=False)
+    a = dentalux.render(CORNELL, seed=5, threads=1, **kw)
+    b = dentalux.render(CORNELL, seed=5, threads=2, **kw)
+    c = dentalux.render(CORNELL, seed=6, threads=2, **kw)
+    assert a.radiance.shape == (20, 20, 1) and a.radiance.dtype == np.float32
+    assert np.all(np.isfinite(a.radiance)) and a.radiance.min() >= 0
+    assert a.radiance.mean() > 0
+    assert np.array_equal(a.radiance, b.radiance)
+    assert not np.array_equal(a.radiance, c.radiance)
+    assert a.stats["bands"][0]["photons_emitted"] == 4000
+
+
+def _plane_under_point_light(size: int, fov: float, height: float, distance: float,
+                             intensity: float, rho: float) -> dict:
+    return {
+        "camera": {"position": [0, 0, distance], "look_at": [0, 0, 0], "up": [0, 1, 0],
+                   "fov_deg": fov, "resolution": [size, size]},
+        "surfaces": {"grey": {"reflectance": rho}},
+        "shapes": [{"type": "quad", "corner": [-1000, -1000, 0], "u": [2000, 0, 0],
+                    "v": [0, 2000, 0], "surface": "grey"}],
+        "lights": [{"type": "point", "position": [0, 0, height], "intensity": intensity,
+                    "spectrum": "flat"}],
+    }
+
+
+@needs_core
+def test_plane_under_point_light_matches_closed_form():
+    """A Lambertian plane (rho) under a point light (I, height h): per pixel
+    L = rho/pi * I h / r^3 [mm units], averaged over the pixel's footprint. The tolerance is
+    5 standard errors of the sub-pixel jitter (spp samples) plus 0.2 %."""
+    size, fov, h, dist, intensity, rho, spp = 16, 40.0, 50.0, 100.0, 1000.0, 0.5, 16
+    d = _plane_under_point_light(size, fov, h, dist, intensity, rho)
+    img = dentalux.render(d, integrator="pm", spp=spp, photons=1000, bands=[550.0], seed=3,
+                          progress=False).radiance[:, :, 0].astype(float)
+    # Closed form on a 16 x 16 sub-grid of every pixel (symmetric about the light, so the
+    # image's row/column orientation does not matter).
+    sub = 16
+    t = math.tan(math.radians(fov) / 2)
+    s = (np.arange(size * sub) + 0.5) / (size * sub)
+    ndc = (2 * s - 1) * t * dist
+    x, y = np.meshgrid(ndc, -ndc)
+    r = np.sqrt(x**2 + y**2 + h**2)
+    fine = rho / math.pi * intensity * h / r**3
+    blocks = fine.reshape(size, sub, size, sub)
+    mean = blocks.mean(axis=(1, 3))
+    sd = blocks.std(axis=(1, 3))
+    tol = 5 * sd / math.sqrt(spp) + 0.002 * mean
+    assert np.all(np.abs(img - mean) <= tol), np.max(np.abs(img - mean) / mean)
+    assert img.mean() == pytest.approx(mean.mean(), rel=0.002)
+
+
+@needs_core
+def test_discs_scene_renders_with_vpm():
+    lib = material_library()
+    material = "biomaterial-table1"
+    if lib is None or material not in lib.names():
+        material = "enamel"
+    d = discs(material=material, resolution=(16, 12))
+    res = dentalux.render(d, integrator="vpm", spp=1, photons=2000, volume_photons=5000,
+                          bands=[540.0], seed=1, progress=False)
+    assert res.radiance.shape == (12, 16, 1)
+    assert np.all(np.isfinite(res.radiance)) and res.radiance.min() >= 0
+    assert res.radiance.mean() > 0
+
+
+def test_image_texture_from_file(tmp_path):
+    from PIL import Image
+
+    Image.fromarray(np.array([[0, 51, 255]], dtype=np.uint8), mode="L").save(tmp_path / "t.png")
+    d = base()
+    d["surfaces"]["tex"] = {"type": "image", "file": "t.png", "scale": 0.5}
+    d["shapes"][3]["surface"] = "tex"
+    out = scene_from_dict(d, base_dir=tmp_path).resolve(540)
+    tex = out["surfaces"][1]
+    assert (tex["width"], tex["height"], tex["mapping"]) == (3, 1, "uv")
+    assert tex["data"] == pytest.approx([0.0, 0.1, 0.5])
+    d["surfaces"]["tex"]["file"] = "none.png"
+    with pytest.raises(SceneError, match=r"surfaces\.tex\.file = 'none\.png': file not found"):
+        scene_from_dict(d, base_dir=tmp_path)
