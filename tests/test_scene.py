@@ -724,3 +724,30 @@ def test_image_texture_from_file(tmp_path):
     d["surfaces"]["tex"]["file"] = "none.png"
     with pytest.raises(SceneError, match=r"surfaces\.tex\.file = 'none\.png': file not found"):
         scene_from_dict(d, base_dir=tmp_path)
+
+
+def test_cli_render_hands_equal_energy_radiance_to_colour(fake_core, tmp_path, monkeypatch,
+                                                          capsys):
+    """write_images applies the illuminant itself, so D65-lit radiance is divided by the
+    D65 relative spectrum (CIE: 1.17008 at 450 nm, 1 at 560 nm) and white = the light's
+    radiance scale (15 in cornell.toml)."""
+    from dentalux.cli import render as render_cli
+
+    seen = {}
+
+    def fake_write_images(radiance, wavelengths_nm, out_dir, illuminant="D65", regions=None,
+                          exposure=None, white=1.0):
+        seen.update(radiance=np.array(radiance), bands=list(wavelengths_nm),
+                    illuminant=illuminant, white=white)
+        return {"illuminant": illuminant}
+
+    monkeypatch.setattr(render_cli, "_write_images", lambda: fake_write_images)
+    with pytest.raises(SystemExit) as exc:
+        main(["render", str(CORNELL), "--out", str(tmp_path), "--bands", "450,560",
+              "--resolution", "2x2", "--json"])
+    assert exc.value.code == 0
+    assert seen["illuminant"] == "D65" and seen["white"] == 15.0
+    # the fake core fills band b with its nm value
+    assert seen["radiance"][0, 0, 0] == pytest.approx(450 / 1.17008, rel=1e-5)
+    assert seen["radiance"][0, 0, 1] == pytest.approx(560.0)
+    assert json.loads(capsys.readouterr().out)["colour"] == {"illuminant": "D65"}
