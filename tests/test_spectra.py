@@ -112,3 +112,21 @@ def test_bad_reconstruction_inputs():
         spectra.Reconstruction([450, 540])([0.1, 0.2, 0.3])
     with pytest.raises(ValueError, match="quantity"):
         spectra.paper_reconstruction("ta")
+
+
+def test_plot_spd_writes_png_and_svg(tmp_path, capsys):
+    from dentalux.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["plot", "spd", "--out", str(tmp_path), "--json"])
+    assert exc.value.code == 0
+    import json
+
+    paths = json.loads(capsys.readouterr().out)
+    from PIL import Image
+
+    assert Image.open(paths["png"]).size[0] > 500
+    assert "<svg" in open(paths["svg"]).read(2000)
+    with pytest.raises(SystemExit) as exc:
+        main(["plot", "nosuch", "--out", str(tmp_path)])
+    assert exc.value.code == 2

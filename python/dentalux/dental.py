@@ -246,7 +246,19 @@ def compare(sample: DentalMetrics, reference: DentalMetrics, backing: str = "whi
     if backing not in ("black", "white"):
         raise ValueError(f"backing = {backing!r}: allowed 'black' or 'white'")
     key = f"lab_{backing}"
-    de = float(delta_e00(getattr(sample, key), getattr(reference, key)))
+    lab_s, lab_r = np.array(getattr(sample, key)), np.array(getattr(reference, key))
+    de = float(delta_e00(lab_s, lab_r))
     dtp = float(abs(sample.tp00 - reference.tp00))
+    # first-order error of ΔE00 from the six Lab standard errors (runs taken as independent)
+    var = 0.0
+    for lab, other, res, sign in ((lab_s, lab_r, sample, 0), (lab_r, lab_s, reference, 1)):
+        for j, c in enumerate("Lab"):
+            step = np.zeros(3)
+            step[j] = 1e-4
+            pair = (lab + step, other) if sign == 0 else (other, lab + step)
+            d = (float(delta_e00(*pair)) - de) / 1e-4
+            var += (d * res.stderr.get(f"{key}.{c}", 0.0)) ** 2
     return {"delta_e00": de, "delta_tp00": dtp, "verdict": verdict(de),
-            "translucency_verdict": translucency_verdict(dtp)}
+            "translucency_verdict": translucency_verdict(dtp),
+            "delta_e00_stderr": float(np.sqrt(var)),
+            "delta_tp00_stderr": float(np.hypot(sample.stderr["tp00"], reference.stderr["tp00"]))}

@@ -62,12 +62,14 @@ def shade_command(
         table.add_row(label, " ".join(f"{x:7.2f}" for x in v), " ".join(f"{x:.2f}" for x in e))
     for key, label in (("tp", "TP (ΔE*ab)"), ("tp00", "TP00 (ΔE00)"), ("cr", "CR = Yb/Yw"),
                        ("op", "OP")):
-        table.add_row(label, f"{getattr(m, key):.3f}", f"{m.stderr[key]:.3f}")
+        table.add_row(label, f"{getattr(m, key):.4f}", f"{m.stderr[key]:.4f}")
     if cmp:
         table.add_row(f"ΔE00 vs {ref.material} (over white)", f"{cmp['delta_e00']:.3f}",
-                      f"{cmp['verdict']} (PT {dental.PT}, AT {dental.AT})")
-        table.add_row("ΔTP00", f"{cmp['delta_tp00']:.3f}",
-                      f"{cmp['translucency_verdict']} (TPT {dental.TPT}, TAT {dental.TAT})")
+                      f"{cmp['delta_e00_stderr']:.3f}")
+        table.add_row("  verdict", cmp["verdict"], f"PT {dental.PT}, AT {dental.AT}")
+        table.add_row("ΔTP00", f"{cmp['delta_tp00']:.3f}", f"{cmp['delta_tp00_stderr']:.3f}")
+        table.add_row("  translucency verdict", cmp["translucency_verdict"],
+                      f"TPT {dental.TPT}, TAT {dental.TAT}")
     Console().print(table)
     Console().print(f"{m.photons} photons in {m.seconds:.1f} s")
 
