@@ -195,3 +195,28 @@ def test_reported_stderr_matches_the_spread_over_seeds():
         reported = np.sqrt(np.mean([r.stderr[key] ** 2 for r in runs]))
         # 16 runs: the sample std has a relative error of ~18 %; allow a factor 1.7
         assert reported / 1.7 < spread < reported * 1.7, key
+
+
+def test_scattering_disc_against_adding_doubling():
+    """R1, T1 (collimated) and R2, T2 (diffuse) of a scattering disc against iadpython's
+    UR1, UT1, URU, UTU; then TP from the adding-doubling spectra against the Monte Carlo TP."""
+    iad = pytest.importorskip("iadpython")
+    mat = ToyMaterial("dentin-like", mua=[0.5, 0.1], mus=[30.0, 20.0], g=0.93, n=1.54)
+    bands = np.array([420.0, 520.0, 620.0, 720.0])
+    m = dental.metrics(mat, 1.0, bands=bands, photons=20_000, seed=7)
+    ad = []
+    for lam in bands:
+        o = mat.at(lam)
+        s = iad.Sample(a=o.mus / (o.mua + o.mus), b=(o.mua + o.mus) * 1.0, g=o.g, d=1.0,
+                       n=o.n, n_above=1.0, n_below=1.0, quad_pts=32)
+        ad.append([float(x) for x in s.rt()])
+    ad = np.array(ad).T  # UR1, UT1, URU, UTU
+    for i, key in enumerate(("r1", "t1", "r2", "t2")):
+        got, err = np.array(m.spectra[key]), np.array(m.spectra[f"{key}_stderr"])
+        # 4 standard errors plus 1e-3 for the 32-point quadrature of adding-doubling
+        assert np.all(np.abs(got - ad[i]) <= 4 * err + 1e-3), key
+    r_w = ad[0] + ad[1] * 0.9 * ad[3] / (1 - 0.9 * ad[2])
+    tp_ad = float(np.linalg.norm(color.spectrum_to_Lab(ad[0], bands)
+                                 - color.spectrum_to_Lab(r_w, bands)))
+    # 0.1: the 1e-3 quadrature allowance in R moves L* by ~0.1 at R ~ 0.2
+    assert m.tp == pytest.approx(tp_ad, abs=4 * m.stderr["tp"] + 0.1)
