@@ -94,7 +94,7 @@ def area(verts: np.ndarray, faces: np.ndarray) -> float:
 
 
 def winding_number(points: np.ndarray, verts: np.ndarray, faces: np.ndarray,
-                   chunk: int = 64) -> np.ndarray:
+                   chunk: int = 8) -> np.ndarray:
     """Generalised winding number of each point [-] (solid angles of all triangles / 4π,
     Van Oosterom and Strackee's formula): 1 inside a closed outward mesh, 0 outside."""
     points = np.atleast_2d(np.asarray(points, float))

@@ -31,6 +31,7 @@ from dentalux.teeth.mesh import (
     edge_check,
     euler_characteristic,
     intersects,
+    read_obj,
     signed_volume,
     winding_number,
     write_obj,
@@ -94,10 +95,13 @@ class Tooth:
                         "median_mm": float(np.median(t[m])) if m.any() else None})
         return out
 
-    def check(self, samples: int = 300) -> dict:
-        """Verify both meshes are closed and outward-oriented, the dentin lies inside the
-        enamel (winding number of sampled dentin vertices) and the surfaces do not cross
-        (edge-triangle tests both ways). Returns statistics; raises :class:`MeshError`."""
+    def check(self, samples: int = 100) -> dict:
+        """Verify both meshes are closed and outward-oriented, the surfaces do not cross
+        (every edge of each tested against the other's triangles) and sampled dentin
+        vertices lie inside the enamel (generalised winding number ~ 1). With no crossing,
+        one inside point already puts the whole connected dentin surface inside; the
+        ``samples`` points guard against a detached piece. Returns statistics (counts,
+        volumes, areas, enamel thickness, dimensions); raises :class:`MeshError`."""
         stats: dict = {"name": self.name, "resolution_mm": self.resolution}
         for part in ("enamel", "dentin"):
             v, f = getattr(self, part)
@@ -140,6 +144,30 @@ class Tooth:
         stats["triangles_total"] = stats["enamel"]["triangles"] + stats["dentin"]["triangles"]
         stats["frame"] = self.frame
         return stats
+
+    @classmethod
+    def from_obj(cls, enamel_path, dentin_path, name: str = "tooth") -> Tooth:
+        """A tooth from two OBJ files (e.g. a scanned outer surface replacing the procedural
+        one); run :meth:`check` before rendering it."""
+        return cls(name=name, enamel=read_obj(enamel_path), dentin=read_obj(dentin_path),
+                   resolution=float("nan"), params={"enamel": str(enamel_path),
+                                                    "dentin": str(dentin_path)})
+
+    def shapes(self, enamel: int, dentin: int, outside: int, transform=None) -> list[dict]:
+        """The two dielectric boundaries as render-contract ``mesh`` shapes
+        (docs/render-contract.md): ``enamel``, ``dentin`` and ``outside`` are media indices;
+        ``transform`` an optional 4x4 object-to-world matrix (nested lists)."""
+        out = []
+        for (v, f), inside, outer in ((self.enamel, enamel, outside),
+                                      (self.dentin, dentin, enamel)):
+            shape = {"type": "mesh", "positions": v.tolist(), "triangles": f.tolist(),
+                     "uvs": None,
+                     "boundary": {"kind": "dielectric", "inside": int(inside),
+                                  "outside": int(outer)}}
+            if transform is not None:
+                shape["transform"] = [list(map(float, row)) for row in transform]
+            out.append(shape)
+        return out
 
     def write(self, out_dir, stats: dict | None = None) -> dict:
         """Write ``enamel.obj``, ``dentin.obj`` and ``tooth.json`` (dimensions, targets, mesh
