@@ -220,3 +220,14 @@ def test_scattering_disc_against_adding_doubling():
                                  - color.spectrum_to_Lab(r_w, bands)))
     # 0.1: the 1e-3 quadrature allowance in R moves L* by ~0.1 at R ~ 0.2
     assert m.tp == pytest.approx(tp_ad, abs=4 * m.stderr["tp"] + 0.1)
+
+
+def test_material_from_a_file_with_several_materials(tmp_path):
+    path = tmp_path / "two.toml"
+    path.write_text(TOML + TOML.replace("materials.toy", "materials.toy2"))
+    with pytest.raises(ValueError, match="holds 2 materials"):
+        dental.metrics(path, 1.0, bands="paper")
+    with pytest.raises(ValueError, match="'nope' not in"):
+        dental.metrics(f"{path}:nope", 1.0, bands="paper")
+    m = dental.metrics(f"{path}:toy2", 1.0, bands="paper", photons=2_000)
+    assert m.material == "toy2" and m.tp > 0

@@ -81,6 +81,13 @@ def _resolve_material(material):
     if isinstance(material, (str, Path)):
         from dentalux import materials
 
+        text = str(material)
+        if ".toml:" in text:  # FILE.toml:NAME picks one material of a file
+            path, name = text.rsplit(":", 1)
+            found = materials.load(path)
+            if name not in found:
+                raise ValueError(f"material {name!r} not in {path}: allowed {', '.join(found)}")
+            return found[name]
         p = Path(material)
         if p.suffix == ".toml" or p.is_file():
             if not p.is_file():
@@ -144,8 +151,9 @@ def metrics(material, thickness: float, bands="full", backing_black=0.0, backing
     """Colour metrics of a ``thickness`` [mm] disc of ``material`` (see module doc).
 
     ``material``: a Material (anything with ``.at(l)`` giving mua, mus, g, fd, n), a library
-    name or a TOML file path. ``bands``: 'full' (380-780 nm every 10 nm), 'paper' or a list
-    [nm]. ``photons`` per band and run (2 runs per band in an air gap, 3 in contact).
+    name, a TOML file path (one material) or ``FILE.toml:NAME``. ``bands``: 'full'
+    (380-780 nm every 10 nm), 'paper' or a list [nm]. ``photons`` per band and run (2 runs
+    per band in an air gap, 3 in contact).
     ``reconstruction``: extrapolation basis outside the bands ('hold' or 'zero').
     """
     mat = _resolve_material(material)
