@@ -112,13 +112,16 @@ class ColourSystem:
         from dentalux.spectra import Reconstruction
 
         rec = reconstruction or Reconstruction(wavelengths_nm, grid=self.wavelengths)
+        matrix = rec.matrix
         if len(rec.grid) != len(self.wavelengths) or np.any(rec.grid != self.wavelengths):
-            raise ValueError("reconstruction grid must equal the colour system's grid")
+            # resample the reconstruction onto this grid (linear between its grid points)
+            matrix = np.stack([np.interp(self.wavelengths, rec.grid, col) for col in matrix.T],
+                              axis=1)
         values = np.asarray(values, dtype=float)
         if values.shape[-1] != len(rec.bands):
             raise ValueError(f"values have {values.shape[-1]} bands, expected {len(rec.bands)}")
         # fold the (linear) reconstruction into the weights: 3 x bands, no grid-sized arrays
-        return values @ (self.weights @ rec.matrix).T
+        return values @ (self.weights @ matrix).T
 
     def spectrum_to_Lab(self, values, wavelengths_nm, reconstruction=None) -> np.ndarray:
         """Band values -> CIELAB (see :meth:`spectrum_to_XYZ`)."""

@@ -157,7 +157,11 @@ def metrics(material, thickness: float, bands="full", backing_black=0.0, backing
     ``reconstruction``: extrapolation basis outside the bands ('hold' or 'zero').
     """
     mat = _resolve_material(material)
-    if isinstance(thickness, bool) or not (float(thickness) > 0 and np.isfinite(thickness)):
+    try:
+        ok = not isinstance(thickness, bool) and float(thickness) > 0 and np.isfinite(thickness)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
         raise ValueError(f"thickness = {thickness!r}: must be a finite number > 0 [mm]")
     if contact is not None and not (float(contact) >= 1.0):
         raise ValueError(f"contact = {contact!r}: refractive index of the coupling medium >= 1")

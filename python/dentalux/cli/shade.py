@@ -9,11 +9,17 @@ from rich.console import Console
 from rich.table import Table
 
 from dentalux import dental
+from dentalux.spectra import full_bands
 
 
 def _bands(spec: str):
     if spec in ("full", "paper"):
         return spec
+    if spec.startswith("full:"):  # full:STEP, a 380-780 nm sweep every STEP nm
+        try:
+            return full_bands(step=float(spec[5:]))
+        except ValueError:
+            raise ValueError(f"--bands = {spec!r}: full:STEP needs a step > 0 [nm]") from None
     try:
         return [float(x) for x in spec.split(",") if x.strip()]
     except ValueError:
@@ -24,7 +30,8 @@ def shade_command(
     material: str = typer.Argument(..., help="material name in the library, or a TOML file"),
     thickness: float = typer.Option(1.0, help="disc thickness [mm]"),
     against: str = typer.Option(None, help="reference material (name or TOML) for ΔE00/ΔTP00"),
-    bands: str = typer.Option("full", help="'full' (380-780 nm/10 nm), 'paper' or nm list"),
+    bands: str = typer.Option("full", help="'full' (380-780 nm/10 nm), 'full:STEP', 'paper' "
+                              "or a comma-separated nm list"),
     backing_black: float = typer.Option(0.0, help="black backing reflectance, in [0, 1]"),
     backing_white: float = typer.Option(0.9, help="white backing reflectance, in [0, 1]"),
     contact: float = typer.Option(None, help="optical contact: coupling medium index (>= 1); "
