@@ -1,8 +1,7 @@
 """Minimal end-to-end check of the slab binding (the full suite is test_slab.py)."""
 
-import pytest
-
 import dentalux
+import pytest
 from dentalux.slab import simulate
 
 
