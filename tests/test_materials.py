@@ -258,3 +258,42 @@ def test_cli_list_show_plot(tmp_path, capsys):
     assert img.ndim == 3 and img.shape[0] > 200 and img.shape[1] > 600
     assert _cli(["materials", "show", "unobtainium"]) == 2
     assert "unknown material" in capsys.readouterr().err
+
+
+FITTED = """
+[materials.fit-demo]
+description = "fitted from table.csv"
+wavelength_nm = [450.0, 540.0, 605.0]
+mua = [0.5, 0.3, 0.0]
+mus = [4.0, 3.5, 3.2]
+g = [0.75, 0.75, 0.75]
+fd = [0.0, 0.0, 0.0]
+n = [1.55, 1.54, 1.537]
+mua_ci = [[0.45, 0.55], [0.25, 0.35], [0.0, 0.02]]
+mus_ci = [[3.9, 4.1], [3.4, 3.6], [3.1, 3.3]]
+
+[materials.fit-demo.provenance]
+kind = "fitted"
+source = "table.csv"
+model = "slab-mc"
+date = "2026-11-22"
+notes = "mua is not resolved at [605.0] nm"
+"""
+
+
+def test_fitted_file_with_confidence_intervals(tmp_path):
+    """The inversion's output format (extra *_ci keys, extra provenance keys, a zero mua)."""
+    p = tmp_path / "fit.toml"
+    p.write_text(FITTED)
+    m = M.get(str(p))
+    assert m.ci["mua"].shape == (3, 2) and m.ci["mus"][1, 1] == 3.6
+    assert m.value_provenance("mua").startswith("fitted: table.csv")
+    o = m.at([500.0, 580.0, 650.0])
+    assert np.all(np.isfinite(o.mua)) and o.mua[2] == 0.0  # zero: linear, then held
+    assert o.mua[1] == pytest.approx(0.3 * (1 - 40 / 65))
+    s = m.scaled(mus_factor=2.0)
+    np.testing.assert_allclose(s.ci["mus"], 2.0 * m.ci["mus"])
+    assert s.to_dict()["mus_ci"][0] == [7.8, 8.2]
+    p.write_text(FITTED.replace("mus_ci = [[3.9, 4.1], ", "mus_ci = ["))
+    with pytest.raises(ValueError, match="mus_ci"):
+        M.load(p)

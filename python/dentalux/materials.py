@@ -85,6 +85,9 @@ class Material:
     n: np.ndarray
     provenance: dict = field(default_factory=dict)
     description: str = ""
+    ci: dict = field(default_factory=dict)
+    """Optional confidence intervals of fitted values: ``{"mua": (N, 2) array, ...}`` from the
+    file's ``mua_ci``/``mus_ci``/... keys (same units as the quantity)."""
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -172,6 +175,9 @@ class Material:
             n=self.n.copy(),
             provenance=prov,
             description=self.description,
+            ci={q: v * (float(mus_factor) if q == "mus" else float(mua_factor) if q == "mua"
+                        else 1.0)
+                for q, v in self.ci.items() if not (q == "g" and g is not None)},
         )
 
     @property
@@ -185,6 +191,8 @@ class Material:
              "wavelength_nm": self.wavelength_nm.tolist()}
         for q in QUANTITIES:
             d[q] = getattr(self, q).tolist()
+        for q, v in self.ci.items():
+            d[f"{q}_ci"] = np.asarray(v).tolist()
         d["provenance"] = copy.deepcopy(self.provenance)
         return d
 
@@ -247,6 +255,11 @@ def _validate(m: Material) -> None:
             raise ValueError(
                 f"{where}: {q}[{i}] = {v[i]!r} at {lam[i]:g} nm is out of range: allowed {allowed}"
             )
+    for q, v in m.ci.items():
+        if q not in QUANTITIES:
+            raise ValueError(f"{where}: {q}_ci: unknown quantity, allowed {', '.join(QUANTITIES)}")
+        if np.shape(v) != (lam.size, 2):
+            raise ValueError(f"{where}: {q}_ci must hold one [low, high] pair per wavelength")
     prov = m.provenance
     if not isinstance(prov, dict):
         raise ValueError(f"{where}: provenance must be a table")
@@ -287,7 +300,8 @@ def _from_table(name: str, table: dict, origin: str) -> Material:
     missing = [k for k in ("wavelength_nm",) + QUANTITIES if k not in table]
     if missing:
         raise ValueError(f"{where}: missing key(s) {', '.join(missing)}")
-    known = {"description", "wavelength_nm", "provenance", *QUANTITIES}
+    known = {"description", "wavelength_nm", "provenance", *QUANTITIES,
+             *(f"{q}_ci" for q in QUANTITIES)}
     unknown = sorted(set(table) - known)
     if unknown:
         raise ValueError(f"{where}: unknown key(s) {', '.join(unknown)}")
@@ -297,6 +311,13 @@ def _from_table(name: str, table: dict, origin: str) -> Material:
             arrays[k] = np.asarray(table[k], dtype=float).reshape(-1)
         except (TypeError, ValueError):
             raise ValueError(f"{where}.{k} must be a list of numbers") from None
+    ci = {}
+    for q in QUANTITIES:
+        if f"{q}_ci" in table:
+            try:
+                ci[q] = np.asarray(table[f"{q}_ci"], dtype=float)
+            except (TypeError, ValueError):
+                raise ValueError(f"{where}.{q}_ci must be a list of [low, high] pairs") from None
     prov = copy.deepcopy(table.get("provenance", {}))
     if not isinstance(prov, dict):
         raise ValueError(f"{where}.provenance must be a table")
@@ -308,7 +329,7 @@ def _from_table(name: str, table: dict, origin: str) -> Material:
     prov["file"] = origin
     try:
         return Material(name=name, description=str(table.get("description", "")),
-                        provenance=prov, **arrays)
+                        provenance=prov, ci=ci, **arrays)
     except ValueError as exc:
         raise ValueError(f"{origin}: {exc}") from None
 
