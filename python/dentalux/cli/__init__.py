@@ -8,6 +8,7 @@ import sys
 import typer
 
 from dentalux.cli import demo, slab
+from dentalux.cli import figures as figures_cli
 from dentalux.cli import fit as fit_cli
 from dentalux.cli import materials as materials_cli
 from dentalux.cli import plot as plot_cli
@@ -24,6 +25,7 @@ app = typer.Typer(
 )
 slab.register(app)
 demo.register(app)
+figures_cli.register(app)
 materials_cli.register(app)
 tooth_cli.register(app)
 shade_cli.register(app)

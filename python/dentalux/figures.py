@@ -1,0 +1,361 @@
+"""The paper's figures, reproduced from one command (``dentalux figures --out DIR``).
+
+- Fig. 2: D65 and the interpolated transmitted power of the Table 1 disc.
+- Fig. 3: two discs of the Table 1 biomaterial on a checker ribbon, one on it and one 5 mm
+  above it; rendered at the paper's stated 5 mm thickness and at the measured sample's
+  0.5 mm (see docs/figures.md for why both).
+- Fig. 4: the same with enamel whose optical thickness is scaled so that the disc transmits
+  as much (D65-weighted total transmittance of the slab) as the biomaterial disc, as the
+  paper did; the scale factor is recorded in the figure's JSON and in the material's
+  provenance.
+- Fig. 5: three procedural teeth (enamel over dentin) in a small Cornell box.
+- A figure the paper did not have: a crown of the biomaterial on a dentin stump beside a
+  natural incisor, with the ΔE00 between the two crowns printed on it.
+- A side-by-side crop of Fig. 3 rendered with ``vpm`` and with the reference ``volpath``.
+
+Every figure folder holds image.png, image.exr, spectral.exr, radiance.npy, colour.json and
+figure.json (settings, timings, peak memory). Lengths in mm, wavelengths in nm.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import shutil
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from dentalux import materials, spectra
+from dentalux.outputs import peak_memory_bytes, write_render_outputs
+from dentalux.render import render
+from dentalux.scene.builtin import discs as discs_scene
+from dentalux.scene.load import scene_from_dict
+from dentalux.slab import Layer, simulate
+
+PAPER_BANDS = [450.0, 540.0, 605.0]
+
+
+@dataclass(frozen=True)
+class Quality:
+    """Photon counts and image sizes of one quality level."""
+
+    name: str
+    resolution: tuple[int, int]
+    spp: int
+    photons: int
+    volume_photons: int
+    tooth_resolution_mm: float
+    crop_resolution: tuple[int, int]
+    volpath_spp: int
+
+
+QUALITIES = {
+    # a few minutes for everything on a 2-core machine (what `make demo` runs)
+    "preview": Quality("preview", (240, 180), 2, 50_000, 200_000, 0.35, (96, 72), 64),
+    # the paper's photon counts: 100 M volume photons, 1 M global photons
+    "paper": Quality("paper", (512, 384), 16, 1_000_000, 100_000_000, 0.15, (192, 144), 1024),
+}
+
+
+def _media_table(material, bands) -> dict:
+    """A scene medium with explicit per-band values from a Material (used for materials
+    that are not in the library, such as a scaled copy)."""
+    v = material.at(np.asarray(bands, float))
+    table = {}
+    for key in ("mua", "mus", "g", "fd", "n"):
+        vals = np.atleast_1d(getattr(v, key)).astype(float).tolist()
+        table[key] = {"wavelengths_nm": [float(b) for b in bands], "values": vals}
+    return table
+
+
+def disc_scene(medium: dict, thickness_mm: float, quality: Quality) -> dict:
+    """The Fig. 3 set-up with discs of ``thickness_mm``: the left disc lies on the ribbon,
+    the right one's underside is 5 mm above it (as in the paper)."""
+    d = discs_scene(resolution=quality.resolution)
+    d["media"] = {"disc": medium}
+    for shape in d["shapes"]:
+        if shape["type"] == "cylinder":
+            shape["height"] = float(thickness_mm)
+    d["camera"]["look_at"] = [0.0, 0.0, min(2.5, thickness_mm / 2 + 2.0)]
+    return d
+
+
+def transmittance_d65(material, thickness_mm: float, photons: int = 20_000,
+                      seed: int = 3) -> float:
+    """D65-weighted total transmittance of a disc (slab simulator, collimated normal light),
+    from the paper's three bands reconstructed with the `hold` basis."""
+    tt = []
+    for wl in PAPER_BANDS:
+        v = material.at(wl)
+        r = simulate([Layer(mua=v.mua, mus=v.mus, g=v.g, n=v.n, thickness=thickness_mm,
+                            fd=v.fd)], n_photons=photons, seed=seed, estimator="weighted")
+        tt.append(r.total_transmittance)
+    grid = spectra.FINE_GRID
+    spectrum = np.interp(grid, PAPER_BANDS, tt)
+    return float(spectra.weighted_mean(spectrum, grid))
+
+
+def match_enamel_scale(target_tt: float, thickness_mm: float, enamel) -> float:
+    """The factor s on enamel's μa and μs (its optical thickness) whose disc has the target
+    D65 total transmittance: bisection on log s (transmittance falls monotonically with s)."""
+    lo, hi = -6.0, 6.0
+    for _ in range(22):
+        mid = 0.5 * (lo + hi)
+        tt = transmittance_d65(enamel.scaled(math.exp(mid), math.exp(mid)), thickness_mm)
+        if tt > target_tt:
+            lo = mid
+        else:
+            hi = mid
+    return math.exp(0.5 * (lo + hi))
+
+
+def _render_figure(name: str, scene: dict, out: Path, quality: Quality, integrator: str = "vpm",
+                   regions: dict | None = None, extra: dict | None = None,
+                   bands=PAPER_BANDS, **overrides) -> dict:
+    sc = scene_from_dict(scene)
+    t0 = time.perf_counter()
+    settings = dict(spp=quality.spp, photons=quality.photons,
+                    volume_photons=quality.volume_photons)
+    settings.update(overrides)
+    if integrator in ("volpath", "path"):
+        settings.pop("volume_photons")
+        settings.pop("photons")
+    result = render(sc, integrator=integrator, bands=bands, seed=1, **settings)
+    folder = out / name
+    summary = write_render_outputs(sc, result, folder, regions=regions)
+    summary.update({"figure": name, "quality": asdict(quality), **(extra or {})})
+    summary["timings"]["figure_s"] = time.perf_counter() - t0
+    summary["peak_memory_bytes"] = peak_memory_bytes()
+    (folder / "figure.json").write_text(json.dumps(summary, indent=2, default=str))
+    shutil.copyfile(folder / "image.png", out / f"{name}.png")
+    return summary
+
+
+def fig2(out: Path) -> dict:
+    from dentalux.plots import fig2_spd
+
+    paths = fig2_spd(out, stem="fig2_spd")
+    return {"figure": "fig2_spd", "files": paths,
+            "linear_only_fraction": spectra.linear_only_fraction()}
+
+
+def fig3(out: Path, quality: Quality, thickness_mm: float) -> dict:
+    name = f"fig3_biomaterial_{thickness_mm:g}mm"
+    scene = disc_scene({"material": "biomaterial-table1"}, thickness_mm, quality)
+    return _render_figure(name, scene, out, quality,
+                          extra={"disc_thickness_mm": thickness_mm})
+
+
+def fig4(out: Path, quality: Quality, thickness_mm: float) -> dict:
+    bio = materials.get("biomaterial-table1")
+    enamel = materials.get("enamel")
+    target = transmittance_d65(bio, thickness_mm)
+    s = match_enamel_scale(target, thickness_mm, enamel)
+    scaled = enamel.scaled(
+        mus_factor=s, mua_factor=s,
+        note=f"optical thickness x {s:.4g} so that a {thickness_mm:g} mm disc transmits "
+             f"{target:.4f} of D65 like the biomaterial (Fig. 4)")
+    name = f"fig4_enamel_{thickness_mm:g}mm"
+    scene = disc_scene(_media_table(scaled, PAPER_BANDS), thickness_mm, quality)
+    return _render_figure(name, scene, out, quality, extra={
+        "disc_thickness_mm": thickness_mm, "enamel_optical_thickness_factor": s,
+        "target_d65_transmittance": target,
+        "enamel_d65_transmittance": transmittance_d65(scaled, thickness_mm),
+        "material_provenance": scaled.provenance})
+
+
+def cornell_teeth_scene(quality: Quality, box_mm: float = 40.0) -> dict:
+    """Three procedural teeth standing in a small Cornell box (y up, open towards -z)."""
+    from dentalux.scene.builtin import GREEN, RED
+
+    s = box_mm
+    up = {"axis": [1.0, 0.0, 0.0], "angle_deg": -90.0}  # tooth +z (crown) -> +y, labial -> -z
+    root = 13.3  # the teeth's roots reach 13 mm below the CEJ (teeth/incisor.py, molar.py)
+
+    def tooth(model, x, z, turn):
+        return {"type": "tooth", "model": model, "resolution": quality.tooth_resolution_mm,
+                "enamel": "enamel", "dentin": "dentin", "outside": "air",
+                "transform": {"rotate": [up, {"axis": [0.0, 1.0, 0.0], "angle_deg": turn}],
+                              "translate": [x, root, z]}}
+
+    quad = {"type": "quad"}
+    return {
+        "scene": {"name": "cornell-teeth", "description": "Fig. 5: three teeth in a Cornell box"},
+        "camera": {"position": [s / 2, s / 2, -2.1 * s], "look_at": [s / 2, s / 2 - 2, 0.0],
+                   "up": [0.0, 1.0, 0.0], "fov_deg": 36.0,
+                   "resolution": list(quality.resolution)},
+        "media": {"enamel": {"material": "enamel"}, "dentin": {"material": "dentin"}},
+        "surfaces": {"white": {"type": "lambertian", "reflectance": 0.75},
+                     "red": {"type": "lambertian", "reflectance": RED},
+                     "green": {"type": "lambertian", "reflectance": GREEN}},
+        "shapes": [
+            {**quad, "name": "floor", "corner": [0, 0, 0], "u": [s, 0, 0], "v": [0, 0, s],
+             "surface": "white"},
+            {**quad, "name": "ceiling", "corner": [0, s, 0], "u": [s, 0, 0], "v": [0, 0, s],
+             "surface": "white"},
+            {**quad, "name": "back", "corner": [0, 0, s], "u": [s, 0, 0], "v": [0, s, 0],
+             "surface": "white"},
+            {**quad, "name": "left", "corner": [0, 0, 0], "u": [0, 0, s], "v": [0, s, 0],
+             "surface": "red"},
+            {**quad, "name": "right", "corner": [s, 0, 0], "u": [0, 0, s], "v": [0, s, 0],
+             "surface": "green"},
+            tooth("incisor", 0.27 * s, 0.45 * s, 15.0),
+            tooth("molar", 0.52 * s, 0.55 * s, -10.0),
+            tooth("incisor", 0.77 * s, 0.4 * s, -25.0),
+        ],
+        "lights": [{"type": "quad", "name": "ceiling light",
+                    "corner": [0.35 * s, 0.995 * s, 0.35 * s], "u": [0.3 * s, 0, 0],
+                    "v": [0, 0, 0.3 * s], "radiance": 12.0, "spectrum": "D65"}],
+    }
+
+
+def fig5(out: Path, quality: Quality) -> dict:
+    return _render_figure("fig5_teeth_cornell", cornell_teeth_scene(quality), out, quality)
+
+
+def crown_scene(quality: Quality) -> tuple[dict, dict]:
+    """A natural incisor (left) and the same tooth whose enamel volume is replaced by the
+    biomaterial: a full-coverage crown on the natural dentin (right). Returns the scene and
+    the image regions (labial thirds of each crown) for the colour comparison."""
+    up = {"axis": [1.0, 0.0, 0.0], "angle_deg": -90.0}
+    w, h = quality.resolution
+
+    def tooth(x, enamel_medium):
+        return {"type": "tooth", "model": "incisor", "resolution": quality.tooth_resolution_mm,
+                "enamel": enamel_medium, "dentin": "dentin", "outside": "air",
+                "transform": {"rotate": [up], "translate": [x, 0.0, 0.0]}}
+
+    scene = {
+        "scene": {"name": "crown", "description": "biomaterial crown beside a natural incisor"},
+        "camera": {"position": [0.0, 4.0, -60.0], "look_at": [0.0, 4.0, 0.0],
+                   "up": [0.0, 1.0, 0.0], "fov_deg": 26.0, "resolution": [w, h]},
+        "media": {"enamel": {"material": "enamel"}, "dentin": {"material": "dentin"},
+                  "crown": {"material": "biomaterial-table1"}},
+        "surfaces": {"backdrop": {"type": "lambertian", "reflectance": 0.18}},
+        "shapes": [
+            {"type": "quad", "name": "backdrop", "corner": [-60.0, -40.0, 15.0],
+             "u": [120.0, 0.0, 0.0], "v": [0.0, 80.0, 0.0], "surface": "backdrop"},
+            tooth(-6.5, "enamel"),
+            tooth(6.5, "crown"),
+        ],
+        "lights": [{"type": "quad", "name": "key", "corner": [-40.0, 40.0, -60.0],
+                    "u": [80.0, 0.0, 0.0], "v": [0.0, 0.0, 40.0], "radiance": 3.0,
+                    "spectrum": "D65"}],
+    }
+    # crown centres project to x = ±6.5 mm, y from 4 to 8 mm (labial middle third) at 60 mm
+    scale = h / (2 * 60.0 * math.tan(math.radians(13.0)))
+
+    def rect(x_mm):
+        cx, cy = w / 2 + x_mm * scale, h / 2 - (6.0 - 4.0) * scale
+        hw, hh = 1.5 * scale, 1.5 * scale
+        return [int(cx - hw), int(cy - hh), int(cx + hw), int(cy + hh)]
+
+    return scene, {"natural": rect(-6.5), "crown": rect(6.5)}
+
+
+def fig_crown(out: Path, quality: Quality) -> dict:
+    from dentalux.color import delta_e00
+    from dentalux.dental import verdict
+
+    scene, regions = crown_scene(quality)
+    summary = _render_figure("crown_vs_natural", scene, out, quality, regions=regions)
+    labs = {k: np.array(v["lab"]) for k, v in summary["colour"]["regions"].items()}
+    de = float(delta_e00(labs["natural"], labs["crown"]))
+    summary["delta_e00"] = de
+    summary["verdict"] = verdict(de)
+    _annotate(out / "crown_vs_natural" / "image.png", out / "crown_vs_natural.png", regions,
+              f"ΔE00 crown vs natural = {de:.2f} ({summary['verdict']})")
+    (out / "crown_vs_natural" / "figure.json").write_text(
+        json.dumps(summary, indent=2, default=str))
+    return summary
+
+
+def _annotate(src: Path, dst: Path, regions: dict, text: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
+
+    img = plt.imread(src)
+    h, w = img.shape[:2]
+    fig = plt.figure(figsize=(w / 100, h / 100 + 0.4), dpi=100)
+    ax = fig.add_axes((0, 0, 1, h / (h + 40)))
+    ax.imshow(img)
+    for name, (x0, y0, x1, y1) in regions.items():
+        ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec="w", lw=0.8))
+        ax.text(x0, y0 - 3, name, color="w", fontsize=6)
+    ax.axis("off")
+    fig.text(0.5, 1 - 20 / (h + 40), text, ha="center", va="center", fontsize=8)
+    fig.savefig(dst, dpi=100)
+    plt.close(fig)
+
+
+def vpm_vs_volpath(out: Path, quality: Quality, thickness_mm: float = 0.5) -> dict:
+    """Fig. 3's disc on the ribbon at a small resolution with vpm and with the unbiased
+    volpath; side by side with the relative RMSE of vpm against volpath."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    q = Quality(**{**asdict(quality), "resolution": quality.crop_resolution})
+    scene = disc_scene({"material": "biomaterial-table1"}, thickness_mm, q)
+    scene["camera"]["look_at"] = [-8.0, 0.0, thickness_mm / 2]
+    scene["camera"]["fov_deg"] = 18.0
+    bands = [540.0]
+    a = _render_figure("crop_vpm", copy.deepcopy(scene), out, q, "vpm", bands=bands)
+    b = _render_figure("crop_volpath", scene, out, q, "volpath", bands=bands,
+                       spp=quality.volpath_spp)
+    ra = np.load(out / "crop_vpm" / "radiance.npy")[..., 0]
+    rb = np.load(out / "crop_volpath" / "radiance.npy")[..., 0]
+    rel_rmse = float(np.sqrt(np.mean((ra - rb) ** 2)) / max(float(np.mean(rb)), 1e-30))
+    top = float(np.percentile(np.concatenate([ra.ravel(), rb.ravel()]), 99)) or 1.0
+    fig, axes = plt.subplots(1, 2, figsize=(7, 3))
+    for ax, img, title, s in ((axes[0], ra, "vpm", a), (axes[1], rb, "volpath", b)):
+        ax.imshow(np.clip(img / top, 0, 1) ** (1 / 2.2), cmap="gray", vmin=0, vmax=1)
+        ax.set_title(f"{title}: {s['timings']['figure_s']:.0f} s", fontsize=8)
+        ax.axis("off")
+    fig.suptitle(f"540 nm, {thickness_mm:g} mm disc on the ribbon; relative RMSE of vpm "
+                 f"vs volpath {100 * rel_rmse:.1f} %", fontsize=8)
+    fig.savefig(out / "vpm_vs_volpath.png", dpi=120)
+    plt.close(fig)
+    return {"figure": "vpm_vs_volpath", "relative_rmse": rel_rmse,
+            "vpm_s": a["timings"]["figure_s"], "volpath_s": b["timings"]["figure_s"]}
+
+
+FIGURES = ("fig2", "fig3", "fig4", "fig5", "crown", "crop")
+
+
+def make_figures(out_dir, quality: str = "preview", only=None, log=print) -> dict:
+    """Render the figures named in ``only`` (default all of FIGURES) into ``out_dir``;
+    returns and writes ``figures.json`` with each figure's summary."""
+    if quality not in QUALITIES:
+        raise ValueError(f"quality = {quality!r}: allowed {', '.join(QUALITIES)}")
+    todo = list(FIGURES if not only else only)
+    for f in todo:
+        if f not in FIGURES:
+            raise ValueError(f"figure {f!r}: allowed {', '.join(FIGURES)}")
+    q = QUALITIES[quality]
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    jobs = {
+        "fig2": lambda: [fig2(out)],
+        "fig3": lambda: [fig3(out, q, 5.0), fig3(out, q, 0.5)],
+        "fig4": lambda: [fig4(out, q, 5.0), fig4(out, q, 0.5)],
+        "fig5": lambda: [fig5(out, q)],
+        "crown": lambda: [fig_crown(out, q)],
+        "crop": lambda: [vpm_vs_volpath(out, q)],
+    }
+    report = {"quality": quality, "figures": {}}
+    for f in todo:
+        t0 = time.perf_counter()
+        log(f"rendering {f} ({quality}) ...")
+        report["figures"][f] = jobs[f]()
+        log(f"  {f} done in {time.perf_counter() - t0:.1f} s")
+    (out / "figures.json").write_text(json.dumps(report, indent=2, default=str))
+    return report

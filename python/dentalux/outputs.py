@@ -1,0 +1,99 @@
+"""What a finished render leaves on disk: radiance.npy, grey previews per band, colour images
+(image.png, image.exr, spectral.exr, colour.json via :func:`dentalux.color.write_images`)
+and render.json. Shared by ``dentalux render`` and ``dentalux figures``."""
+
+from __future__ import annotations
+
+import json
+import resource
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from dentalux.scene.resolve import Scene, d65_relative
+
+
+def peak_memory_bytes() -> int:
+    """Peak resident memory of this process [bytes] (Linux reports ru_maxrss in KiB)."""
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return int(rss if sys.platform == "darwin" else rss * 1024)
+
+
+def write_previews(radiance: np.ndarray, bands: list[float], out: Path) -> dict[str, str]:
+    """One 8-bit grey PNG per band, sRGB-encoded, with a common exposure: the 99th
+    percentile of all bands maps to white (so relative brightness between bands is kept)."""
+    from PIL import Image
+
+    finite = radiance[np.isfinite(radiance)]
+    top = float(np.percentile(finite, 99)) if finite.size else 0.0
+    scale = 1.0 / top if top > 0 else 1.0
+    files = {}
+    for b, wl in enumerate(bands):
+        x = np.clip(np.nan_to_num(radiance[:, :, b] * scale), 0.0, 1.0)
+        srgb = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+        name = f"band_{wl:g}nm.png"
+        Image.fromarray((srgb * 255 + 0.5).astype(np.uint8), mode="L").save(out / name)
+        files[f"{wl:g}"] = str(out / name)
+    return files
+
+
+def colour_inputs(scene: Scene, bands: list[float]) -> tuple[np.ndarray, str, float]:
+    """What ``write_images`` needs: it expects radiance relative to an equal-energy light
+    and applies the illuminant itself. When every light has the same named spectrum (D65 or
+    flat), divide by that relative spectrum and name the illuminant (D65 or E); ``white`` is
+    the brightest light's radiance scale. Otherwise the radiance is the stimulus itself
+    (illuminant E, white 1)."""
+    lights = scene.description["lights"]
+    kinds = {lt["spectrum"] if isinstance(lt["spectrum"], str) else "table" for lt in lights}
+    if kinds == {"D65"}:
+        divisor = np.array([d65_relative(wl) for wl in bands])
+        illuminant = "D65"
+    elif kinds == {"flat"}:
+        divisor = np.ones(len(bands))
+        illuminant = "E"
+    else:
+        return np.ones(len(bands)), "E", 1.0
+    white = max(lt.get("radiance", lt.get("intensity", 1.0)) for lt in lights)
+    return divisor, illuminant, float(white)
+
+
+def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None = None,
+                         scene_file: str | None = None, warn=None) -> dict:
+    """Write radiance.npy, previews, colour images and render.json for a RenderResult;
+    returns the render.json dictionary."""
+    from dentalux.color import write_images
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    np.save(out / "radiance.npy", result.radiance)
+    files = {"radiance": str(out / "radiance.npy"),
+             "previews": write_previews(result.radiance, result.bands, out)}
+    summary = {
+        "scene": scene_file,
+        "scene_name": scene.description["scene"]["name"],
+        "scene_hash": result.scene_hash,
+        "bands_nm": result.bands,
+        "shape": list(result.radiance.shape),
+        "settings": result.settings,
+        "timings": {"load_s": result.stats["seconds_load"],
+                    "per_band_s": result.stats["seconds_per_band"],
+                    "render_s": result.stats["seconds_total"]},
+        "photons": {key: [b.get(key) for b in result.stats["bands"]]
+                    for key in sorted({k for b in result.stats["bands"] for k in b
+                                       if "photon" in k})},
+        "stats": result.stats["bands"],
+        "files": files,
+    }
+    divisor, illuminant, white = colour_inputs(scene, result.bands)
+    try:
+        summary["colour"] = write_images(result.radiance / divisor, result.bands, out,
+                                         illuminant=illuminant, regions=regions,
+                                         exposure=None, white=white)
+    except ValueError as exc:  # e.g. too few bands for a colour image
+        summary["colour_error"] = str(exc)
+        if warn:
+            warn(f"warning: no colour image: {exc}")
+    summary["peak_memory_bytes"] = peak_memory_bytes()
+    (out / "render.json").write_text(json.dumps(summary, indent=2))
+    return summary
