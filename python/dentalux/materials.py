@@ -401,7 +401,7 @@ def get(name: str, variant: str | None = None) -> Material:
     if not isinstance(name, str | Path):
         raise ValueError(f"material name must be a string, got {type(name).__name__}")
     text = str(name)
-    if text.endswith(".toml") or Path(text).is_file():
+    if text.endswith(".toml") or "/" in text or "\\" in text:
         mats = load(text)
         real = {k: m for k, m in mats.items() if k == m.name}
         if variant is not None:
