@@ -15,7 +15,8 @@ stored source). Enamel thickness: not found for incisal/labial enamel of incisor
 chosen to follow the general pattern of §6 (about 0.1 mm at the CEJ, 1-2.5 mm at the edge or
 cusps): about 0.9 mm labially in the incisal two thirds, 0.6 mm lingually, and 1.8 mm of
 enamel above the dentin at the incisal edge, so the incisal edge is enamel only.
-Not modelled: the pulp, mamelons, the scalloped CEJ, the lingual fossa's marginal ridges.
+Not modelled: the pulp, mamelons, the scalloped CEJ, the lingual marginal ridges (the lingual
+fossa is only a concave lingual profile).
 """
 
 from __future__ import annotations
@@ -36,7 +37,9 @@ ROOT_LENGTH_MM = 13.0
 _Z = [-13.0, -8.0, -4.0, 0.0, 2.0, 4.5, 6.5, 8.5, 10.6]
 _HALF_WIDTH = [0.95, 2.05, 2.85, 3.5, 3.7, 4.15, 4.35, 4.35, 4.35]  # mesio-distal, x
 _LABIAL = [0.95, 2.0, 2.75, 3.15, 3.45, 3.05, 2.3, 1.6, 0.85]  # +y half-width
-_LINGUAL = [0.95, 2.0, 2.95, 3.55, 3.55, 2.6, 1.6, 0.85, 0.25]  # -y half-width
+# -y half-width: cingulum bulge, then the concave lingual fossa, then the thin incisal edge
+_Z_LINGUAL = [-13.0, -8.0, -4.0, 0.0, 1.8, 3.3, 5.0, 6.8, 8.7, 10.6]
+_LINGUAL = [0.95, 2.0, 2.95, 3.55, 3.55, 2.5, 1.55, 1.05, 0.6, 0.25]
 _EXPONENT = [2.2, 2.2, 2.2, 2.4, 2.6, 2.9, 3.0, 3.0, 3.0]
 
 
@@ -55,9 +58,9 @@ def incisor(resolution: float = 0.2, root_layer_mm: float = 0.08,
     grid = Grid.around((-4.6, -4.0, -ROOT_LENGTH_MM - 0.3), (4.6, 3.8, CROWN_LENGTH_MM + 0.3),
                        resolution)
     x, y, z = grid.points()
-    spline = {k: PchipInterpolator(_Z, v, extrapolate=True)
-              for k, v in (("a", _HALF_WIDTH), ("lab", _LABIAL), ("lin", _LINGUAL),
-                           ("m", _EXPONENT))}
+    spline = {k: PchipInterpolator(zs, v, extrapolate=True)
+              for k, zs, v in (("a", _Z, _HALF_WIDTH), ("lab", _Z, _LABIAL),
+                               ("lin", _Z_LINGUAL, _LINGUAL), ("m", _Z, _EXPONENT))}
     zc = np.clip(z, _Z[0], _Z[-1])
     a, lab, lin, m = (spline[k](zc) for k in ("a", "lab", "lin", "m"))
     sec = normalize(section(x, y, a, lab, lin, m), resolution)
