@@ -10,6 +10,7 @@ use dentalux_core::control::Control;
 use dentalux_core::geometry::shapes::{BoxShape, Cylinder, Quad, Sphere};
 use dentalux_core::geometry::{Ray, Vec3};
 use dentalux_core::integrators::photon_trace::{trace_photons, StoreMode};
+use dentalux_core::integrators::render::Scratch;
 use dentalux_core::integrators::slab::{self, Estimator, Incidence, SlabConfig, SlabLayer};
 use dentalux_core::integrators::volpath;
 use dentalux_core::integrators::vpm::{Vpm, VpmParams};
@@ -82,8 +83,8 @@ fn vpm_image(scene: &Scene, photons: u64, mode: StoreMode, spp: usize, seed: u64
     };
     let vpm = Vpm::new(scene, &maps, params);
     render(scene, spp, seed + 1, |r, rng| {
-        let mut nb = Neighbours::new();
-        vpm.radiance(r, rng, &mut nb)
+        let mut sc = Scratch::default();
+        vpm.radiance(r, rng, &mut sc)
     })
     .0
 }
@@ -441,4 +442,35 @@ fn vpm_full_nested_spheres_agree_with_volpath() {
     let img = vpm_image(&scene, 400_000, StoreMode::All, 16, 43);
     let (e, se) = compare("vpm-full nested", &img, &reference, &var);
     assert!(e.abs() < 4.0 * se + 0.04, "relative error {e}");
+}
+
+/// The convergence curve recorded in docs/vpm-convergence.md (slow: run with
+/// `cargo test --release -p dentalux-core --test volume_transport -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn convergence_curve_disc() {
+    for n_idx in [1.4, 1.0] {
+        let scene = disc_scene(n_idx, 32, 24);
+        let (reference, var) = render(&scene, 16384, 101, |r, rng| {
+            volpath::radiance(&scene, r, rng)
+        });
+        let se = (var.iter().sum::<f64>()).sqrt() / var.len() as f64;
+        let ref_noise = (var.iter().sum::<f64>() / var.len() as f64).sqrt() / mean(&reference);
+        println!(
+            "n = {n_idx}: volpath mean {:.5} ± {se:.5}, per-pixel rel. noise {ref_noise:.4}",
+            mean(&reference)
+        );
+        println!("| mode | photons | mean rel. error | per-pixel rel. RMSE |");
+        for mode in [StoreMode::All, StoreMode::Paper] {
+            for photons in [25_000u64, 100_000, 400_000, 1_600_000, 6_400_000] {
+                let img = vpm_image(&scene, photons, mode, 256, 103);
+                let b = mean(&reference);
+                println!(
+                    "| {mode:?} | {photons} | {:+.4} | {:.4} |",
+                    (mean(&img) - b) / b,
+                    rmse(&img, &reference) / b
+                );
+            }
+        }
+    }
 }

@@ -46,6 +46,27 @@ pub enum StoreMode {
     All,
 }
 
+/// Which maps a photon pass fills (the ledger is kept either way).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Targets {
+    /// Fill the per-medium volume maps.
+    pub volume: bool,
+    /// Fill the surface map.
+    pub surface: bool,
+}
+
+impl Targets {
+    /// Both maps.
+    pub const BOTH: Targets = Targets {
+        volume: true,
+        surface: true,
+    };
+}
+
+/// Tag of the streams of a second, surface-only photon pass (`vpm` traces `volume_photons`
+/// for the volume maps and `photons` for the surface map, from independent streams).
+pub const SURFACE_PASS: u64 = 1 << 44;
+
 /// Where the emitted power went (sums of photon powers, same units as light power Φ).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Ledger {
@@ -128,6 +149,7 @@ fn trace_batch(
     n_total: u64,
     count: u64,
     mode: StoreMode,
+    targets: Targets,
     rng: &mut Stream,
 ) -> BatchOut {
     let nm = scene.media.len();
@@ -167,7 +189,7 @@ fn trace_batch(
                 if s < t_hit {
                     let x = ray.at(s);
                     let single_traced = !scattered && !reflected;
-                    if mode == StoreMode::All || !single_traced {
+                    if targets.volume && (mode == StoreMode::All || !single_traced) {
                         out.volume[medium as usize].push(Photon::new(x, ray.d, power));
                         led.stored_volume[medium as usize] += power;
                     }
@@ -189,7 +211,7 @@ fn trace_batch(
             };
             match scene.boundary(hit.shape) {
                 Boundary::Opaque { surface } => {
-                    if scattered || specular {
+                    if targets.surface && (scattered || specular) {
                         out.surface.push(Photon::new(hit.p, ray.d, power));
                         led.stored_surface += power;
                     }
@@ -231,12 +253,29 @@ fn trace_batch(
     out
 }
 
-/// Trace `photons` photons from the scene's lights and build the maps. `threads` batches run
-/// at a time per chunk, so transient memory stays a small multiple of one batch per thread.
+/// Trace `photons` photons from the scene's lights and build both maps (see
+/// [`trace_photons_with`]).
 pub fn trace_photons(
     scene: &Scene,
     photons: u64,
     mode: StoreMode,
+    seed: u64,
+    band: u64,
+    control: &Control,
+) -> Result<PhotonMaps> {
+    trace_photons_with(scene, photons, mode, Targets::BOTH, 0, seed, band, control)
+}
+
+/// Trace `photons` photons from the scene's lights into the maps `targets` selects, batch b
+/// drawing from `Stream::new(seed, band, PHOTON_STREAM | tag | b)`. Batches run a chunk at a
+/// time (8 per thread), so transient memory stays a small multiple of one batch per thread.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_photons_with(
+    scene: &Scene,
+    photons: u64,
+    mode: StoreMode,
+    targets: Targets,
+    tag: u64,
     seed: u64,
     band: u64,
     control: &Control,
@@ -256,8 +295,8 @@ pub fn trace_photons(
             .into_par_iter()
             .map(|b| {
                 let count = BATCH.min(photons - b * BATCH);
-                let mut rng = Stream::new(seed, band, PHOTON_STREAM | b);
-                let o = trace_batch(scene, photons, count, mode, &mut rng);
+                let mut rng = Stream::new(seed, band, PHOTON_STREAM | tag | b);
+                let o = trace_batch(scene, photons, count, mode, targets, &mut rng);
                 control.add_done(count);
                 o
             })

@@ -274,6 +274,9 @@ pub fn render_band(
     let (image, mut stats) = match settings.integrator {
         Integrator::Path => super::path::render(scene, settings, control)?,
         Integrator::Pm => super::pm::render(scene, settings, control)?,
+        Integrator::Vpm => super::vpm::render(scene, settings, control, false)?,
+        Integrator::VpmFull => super::vpm::render(scene, settings, control, true)?,
+        Integrator::Volpath => super::volpath::render(scene, settings, control)?,
         other => {
             return Err(Error::InvalidInput(format!(
                 "settings.integrator = {other:?} is not available in this build"

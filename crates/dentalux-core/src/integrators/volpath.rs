@@ -13,13 +13,17 @@
 //!
 //! Radiance across a refracting boundary is scaled by (η_i/η_t)², η_i on the camera side.
 
+use crate::control::Control;
+use crate::error::Result;
 use crate::geometry::Ray;
+use crate::integrators::render::{render_tiles, Settings, Stats};
 use crate::integrators::transport::{cross, spawn, straight_transmittance};
 use crate::math::Frame;
 use crate::rng::Stream;
 use crate::sampling::{cosine_hemisphere, sample_exponential};
 use crate::scene::{Boundary, Scene};
 use std::f64::consts::PI;
+use std::time::Instant;
 
 /// Vertices after which Russian roulette may end a path.
 const RR_START: u32 = 3;
@@ -129,4 +133,22 @@ pub fn radiance(scene: &Scene, ray: &Ray, rng: &mut Stream) -> f64 {
         }
     }
     l
+}
+
+/// Render a band with the reference volumetric path tracer.
+pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(Vec<f32>, Stats)> {
+    let t0 = Instant::now();
+    let (image, totals) = render_tiles(scene, settings, control, |ray, rng, sc| {
+        sc.rays += 1;
+        radiance(scene, ray, rng)
+    })?;
+    Ok((
+        image,
+        Stats {
+            integrator: "volpath".into(),
+            seconds_camera: t0.elapsed().as_secs_f64(),
+            rays: totals.rays,
+            ..Stats::default()
+        },
+    ))
 }

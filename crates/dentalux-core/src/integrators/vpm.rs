@@ -20,13 +20,18 @@
 //! | `radius` [mm] | 2 · cbrt(3 k V / (4π n)) per medium: twice the radius that holds k photons at the map's mean density (V: bounding box of the map's photons, n: its photons) | largest gathering radius |
 //! | `step` Δx [mm] | per medium min(0.5 / σt, scene diagonal / 64) | ray-marching step |
 
+use crate::control::Control;
+use crate::error::Result;
 use crate::geometry::{Hit, Ray};
+use crate::integrators::photon_trace::{trace_photons_with, Targets, SURFACE_PASS};
 use crate::integrators::photon_trace::{PhotonMaps, StoreMode};
+use crate::integrators::render::{render_tiles, Scratch, Settings, Stats};
 use crate::integrators::transport::{cross, eq13_transmittance, spawn, straight_transmittance};
-use crate::photon_map::{Neighbours, PhotonMap};
+use crate::photon_map::{PhotonMap, PHOTON_BYTES};
 use crate::rng::Stream;
 use crate::scene::{Boundary, Scene};
 use std::f64::consts::PI;
+use std::time::Instant;
 
 /// Camera-path depth up to which a mismatched boundary splits into both reflection and
 /// refraction; deeper, one of the two is chosen by Fresnel (unbiased either way).
@@ -150,8 +155,8 @@ impl<'a> Vpm<'a> {
     }
 
     /// Radiance arriving at the camera along `ray` (which starts in the ambient medium).
-    pub fn radiance(&self, ray: &Ray, rng: &mut Stream, nb: &mut Neighbours) -> f64 {
-        self.trace(*ray, self.scene.ambient_medium, 1.0, 0, rng, nb)
+    pub fn radiance(&self, ray: &Ray, rng: &mut Stream, sc: &mut Scratch) -> f64 {
+        self.trace(*ray, self.scene.ambient_medium, 1.0, 0, rng, sc)
     }
 
     /// Follow a camera path of weight `beta` from `ray` in `medium`; `depth` counts boundary
@@ -163,13 +168,14 @@ impl<'a> Vpm<'a> {
         mut beta: f64,
         mut depth: u32,
         rng: &mut Stream,
-        nb: &mut Neighbours,
+        sc: &mut Scratch,
     ) -> f64 {
         let scene = self.scene;
         let mut l = 0.0;
         loop {
             let m = &scene.media[medium as usize];
             let hit = scene.intersect(&ray, f64::INFINITY);
+            sc.rays += 1;
             let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
             let sigma_t = m.sigma_t();
             // lights seen directly (they are not in the BVH and do not block)
@@ -177,7 +183,7 @@ impl<'a> Vpm<'a> {
                 l += beta * le * (-sigma_t * t).exp();
             }
             if sigma_t > 0.0 {
-                l += beta * self.march(&ray, medium, t_hit, rng, nb);
+                l += beta * self.march(&ray, medium, t_hit, rng, sc);
                 beta *= (-sigma_t * t_hit).exp();
                 if beta == 0.0 {
                     return l;
@@ -195,7 +201,7 @@ impl<'a> Vpm<'a> {
                     let rho = scene.surfaces[surface as usize]
                         .reflectance(&hit, scene.shapes[hit.shape as usize].uv_scale);
                     if rho > 0.0 {
-                        l += beta * rho / PI * self.surface_irradiance(&ray, &hit, medium, rng, nb);
+                        l += beta * rho / PI * self.surface_irradiance(&ray, &hit, medium, rng, sc);
                     }
                     return l;
                 }
@@ -211,7 +217,7 @@ impl<'a> Vpm<'a> {
                         Some(t) if depth <= SPLIT_DEPTH => {
                             // split: reflection recursively, refraction in this loop
                             let rr = spawn(scene, &hit, c.reflected);
-                            l += self.trace(rr, c.from, beta * c.reflectance, depth, rng, nb);
+                            l += self.trace(rr, c.from, beta * c.reflectance, depth, rng, sc);
                             beta *= (1.0 - c.reflectance) * scale;
                             ray = spawn(scene, &hit, t);
                             medium = c.to;
@@ -242,14 +248,7 @@ impl<'a> Vpm<'a> {
 
     /// ∫_0^t_end e^(−σt s) S(x(s)) ds along `ray` in `medium` by jittered steps (eq. 11):
     /// S = σs Σ_l L_l p (single scattering, `vpm` only) + Σ p ΔΦ / (4/3 π r³).
-    fn march(
-        &self,
-        ray: &Ray,
-        medium: u32,
-        t_end: f64,
-        rng: &mut Stream,
-        nb: &mut Neighbours,
-    ) -> f64 {
+    fn march(&self, ray: &Ray, medium: u32, t_end: f64, rng: &mut Stream, sc: &mut Scratch) -> f64 {
         let scene = self.scene;
         let m = &scene.media[medium as usize];
         if m.sigma_s <= 0.0 {
@@ -285,15 +284,18 @@ impl<'a> Vpm<'a> {
                         continue;
                     };
                     let t = eq13_transmittance(scene, x, ls.wi, ls.dist, medium);
+                    sc.rays += 1;
                     if t > 0.0 {
                         src += m.sigma_s * m.phase.eval(ls.wi.dot(ray.d)) * ls.value * t;
                     }
                 }
             }
             if !map.is_empty() {
-                src += map
-                    .volume_radiance(x, wo, &m.phase, self.params.k, setup.radius, nb)
-                    .value;
+                let e =
+                    map.volume_radiance(x, wo, &m.phase, self.params.k, setup.radius, &mut sc.nb);
+                sc.radius_sum += e.radius;
+                sc.estimates += 1;
+                src += e.value;
             }
             sum += (-sigma_t * s).exp() * weight * src * dx;
         }
@@ -308,7 +310,7 @@ impl<'a> Vpm<'a> {
         hit: &Hit,
         medium: u32,
         rng: &mut Stream,
-        nb: &mut Neighbours,
+        sc: &mut Scratch,
     ) -> f64 {
         let scene = self.scene;
         let n = if ray.d.dot(hit.n) < 0.0 {
@@ -327,14 +329,110 @@ impl<'a> Vpm<'a> {
                 continue;
             }
             e += ls.value * cos * straight_transmittance(scene, p, ls.wi, ls.dist, medium);
+            sc.rays += 1;
         }
         if !self.maps.surface.is_empty() {
             e += self
                 .maps
                 .surface
-                .surface_irradiance(hit.p, n, self.params.k, self.surface_radius, nb)
+                .surface_irradiance(hit.p, n, self.params.k, self.surface_radius, &mut sc.nb)
                 .value;
         }
         e
     }
+}
+
+/// Render a band with volume photon mapping: `settings.volume_photons` photons fill the volume
+/// maps, `settings.photons` more (independent streams) the surface map; `full` selects
+/// `vpm-full` (single scattering in the map) over `vpm` (single scattering by eqs. 12–13).
+pub fn render(
+    scene: &Scene,
+    settings: &Settings,
+    control: &Control,
+    full: bool,
+) -> Result<(Vec<f32>, Stats)> {
+    let mode = if full {
+        StoreMode::All
+    } else {
+        StoreMode::Paper
+    };
+    let (s, b) = (settings.seed, settings.band);
+    let vol_only = Targets {
+        volume: true,
+        surface: false,
+    };
+    let surf_only = Targets {
+        volume: false,
+        surface: true,
+    };
+    let mut maps = trace_photons_with(
+        scene,
+        settings.volume_photons,
+        mode,
+        vol_only,
+        0,
+        s,
+        b,
+        control,
+    )?;
+    let surf = trace_photons_with(
+        scene,
+        settings.photons,
+        mode,
+        surf_only,
+        SURFACE_PASS,
+        s,
+        b,
+        control,
+    )?;
+    maps.surface = surf.surface;
+    maps.trace_seconds += surf.trace_seconds;
+    maps.build_seconds += surf.build_seconds;
+    let params = VpmParams {
+        k: settings.k,
+        radius: settings.radius,
+        step: settings.step,
+        mode,
+        max_depth: settings.max_depth,
+    };
+    let vpm = Vpm::new(scene, &maps, params);
+    let t0 = Instant::now();
+    let (image, totals) = render_tiles(scene, settings, control, |ray, rng, sc| {
+        vpm.radiance(ray, rng, sc)
+    })?;
+    let volume_stored: usize = maps.volume.iter().map(|m| m.len()).sum();
+    let mut extra = vec![
+        ("volume_photons".into(), volume_stored as f64),
+        ("surface_photons".into(), maps.surface.len() as f64),
+        ("surface_radius".into(), vpm.surface_radius),
+        ("emitted_power".into(), maps.ledger.emitted),
+        (
+            "stored_volume_power".into(),
+            maps.ledger.stored_volume.iter().sum(),
+        ),
+        ("stored_surface_power".into(), surf.ledger.stored_surface),
+    ];
+    for (i, m) in vpm.media.iter().enumerate() {
+        if scene.media[i].sigma_s > 0.0 {
+            extra.push((format!("step_medium{i}"), m.step));
+            extra.push((format!("radius_medium{i}"), m.radius));
+        }
+    }
+    Ok((
+        image,
+        Stats {
+            integrator: if full { "vpm-full" } else { "vpm" }.into(),
+            seconds_photons: maps.trace_seconds,
+            seconds_build: maps.build_seconds,
+            seconds_camera: t0.elapsed().as_secs_f64(),
+            photons_emitted: settings.volume_photons + settings.photons,
+            photons_stored: maps.stored() as u64,
+            bytes_per_photon: PHOTON_BYTES as u64,
+            photon_map_bytes: maps.bytes() as u64,
+            radius: totals.mean_radius(),
+            rays: totals.rays,
+            extra,
+            ..Stats::default()
+        },
+    ))
 }
