@@ -108,6 +108,9 @@ def test_mesh_checks_can_fail():
     flipped[0] = flipped[0, ::-1]
     assert not mesh.edge_check(flipped)["oriented"]  # one face turned over
     assert mesh.signed_volume(v, f[:, ::-1]) < 0  # inward normals
+    vn = mesh.vertex_normals(v, f)
+    np.testing.assert_allclose(np.linalg.norm(vn, axis=1), 1.0, rtol=1e-9)
+    assert np.min(np.einsum("ij,ij->i", vn, v / np.linalg.norm(v, axis=1)[:, None])) > 0.98
     w = mesh.winding_number(np.array([[0.0, 0, 0], [1.5, 0, 0], [2.5, 0, 0], [0, 0, 5]]), v, f)
     np.testing.assert_allclose(w, [1, 1, 0, 0], atol=1e-6)
     small = _sphere(1.0)
@@ -158,6 +161,7 @@ def test_cli_writes_obj_and_json(tmp_path, capsys):
     assert doc["boundaries"]["dentin.obj"] == {"inside": "dentin", "outside": "enamel"}
     saved = json.loads((out / "tooth.json").read_text())
     assert saved["enamel"]["triangles"] == doc["enamel"]["triangles"]
+    assert (out / "dentin.obj").read_text().count("\nvn ") > 0  # smooth-shading normals
     v, f = mesh.read_obj(out / "dentin.obj")
     assert len(f) == doc["dentin"]["triangles"] and mesh.edge_check(f)["oriented"]
 

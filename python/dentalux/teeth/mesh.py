@@ -7,7 +7,8 @@
 - :func:`signed_volume` [mm^3] (> 0 for outward normals), :func:`winding_number` (1 inside a
   closed outward mesh, 0 outside), :func:`intersects` (does any edge of one mesh cross a
   triangle of the other).
-- :func:`write_obj` / :func:`read_obj`: Wavefront OBJ with ``v`` and ``f`` records only.
+- :func:`vertex_normals`: area-weighted unit normals for smooth shading.
+- :func:`write_obj` / :func:`read_obj`: Wavefront OBJ (``v``, ``f`` and optional ``vn``).
 """
 
 from __future__ import annotations
@@ -174,16 +175,32 @@ def intersects(mesh_a: Mesh, mesh_b: Mesh, cell: float | None = None) -> int:
     return hits
 
 
-def write_obj(path, verts: np.ndarray, faces: np.ndarray, comment: str = "") -> Path:
+def vertex_normals(verts: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Unit vertex normals: the area-weighted mean of the adjacent faces' normals (outward
+    for an outward mesh); for smooth shading, not for the geometry."""
+    a, b, c = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
+    fn = np.cross(b - a, c - a)  # length = 2 x area: area weighting for free
+    vn = np.zeros_like(verts)
+    for k in range(3):
+        np.add.at(vn, faces[:, k], fn)
+    return vn / np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
+
+
+def write_obj(path, verts: np.ndarray, faces: np.ndarray, comment: str = "",
+              normals: np.ndarray | None = None) -> Path:
     """Write a Wavefront OBJ (``v x y z`` in mm, 1-based ``f i j k``, counter-clockwise seen
-    from outside)."""
+    from outside); with ``normals`` (one per vertex) also ``vn`` records and ``f i//i ...``."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", encoding="ascii") as fh:
         for line in comment.splitlines():
             fh.write(f"# {line}\n")
         np.savetxt(fh, verts, fmt="v %.6f %.6f %.6f")
-        np.savetxt(fh, faces + 1, fmt="f %d %d %d")
+        if normals is None:
+            np.savetxt(fh, faces + 1, fmt="f %d %d %d")
+        else:
+            np.savetxt(fh, normals, fmt="vn %.6f %.6f %.6f")
+            np.savetxt(fh, np.repeat(faces + 1, 2, axis=1), fmt="f %d//%d %d//%d %d//%d")
     return path
 
 

@@ -33,6 +33,7 @@ from dentalux.teeth.mesh import (
     intersects,
     read_obj,
     signed_volume,
+    vertex_normals,
     winding_number,
     write_obj,
 )
@@ -170,17 +171,20 @@ class Tooth:
         return out
 
     def write(self, out_dir, stats: dict | None = None) -> dict:
-        """Write ``enamel.obj``, ``dentin.obj`` and ``tooth.json`` (dimensions, targets, mesh
-        statistics, frame, parameters) into ``out_dir``; returns the JSON content."""
+        """Write ``enamel.obj``, ``dentin.obj`` (with area-weighted vertex normals for smooth
+        shading) and ``tooth.json`` (dimensions, targets, mesh statistics, frame, parameters)
+        into ``out_dir``; returns the JSON content."""
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         if stats is None:
             stats = self.check()
         head = f"dentalux procedural {self.name}; {self.frame}"
         write_obj(out / "enamel.obj", *self.enamel,
-                  comment=f"{head}\nouter surface: inside enamel, outside air")
+                  comment=f"{head}\nouter surface: inside enamel, outside air",
+                  normals=vertex_normals(*self.enamel))
         write_obj(out / "dentin.obj", *self.dentin,
-                  comment=f"{head}\ndentin surface: inside dentin, outside enamel")
+                  comment=f"{head}\ndentin surface: inside dentin, outside enamel",
+                  normals=vertex_normals(*self.dentin))
         doc = {"tooth": self.name, "files": {"enamel": "enamel.obj", "dentin": "dentin.obj"},
                "boundaries": {"enamel.obj": {"inside": "enamel", "outside": "air"},
                               "dentin.obj": {"inside": "dentin", "outside": "enamel"}},
