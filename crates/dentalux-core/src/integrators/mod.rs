@@ -2,6 +2,10 @@
 //!
 //! - [`slab`]: layered slab lit by a beam or diffuse light; what a spectrophotometer with
 //!   an integrating sphere measures (total transmittance, reflectance, absorption).
+//! - [`photon_trace`]: the photon pass (eqs. 1–10) filling volume and surface photon maps.
+//! - [`vpm`]: volume photon mapping's camera pass (eqs. 11–13), modes `vpm` and `vpm-full`.
+//! - [`volpath`]: the unbiased volumetric path tracer that judges them.
+//! - [`transport`]: boundary crossing, shadow-ray transmittance (eqs. 12–13), ray spawning.
 
 pub mod slab;
 pub mod photon_trace;
