@@ -37,7 +37,8 @@ CAMERA = {"position": VEC, "look_at": VEC, "up": VEC, "fov_deg": float, "width":
 SURFACES = {
     "lambertian": {"type": str, "reflectance": float},
     "checker": {"type": str, "a": float, "b": float, "size": float, "mapping": str},
-    "image": {"type": str, "width": int, "height": int, "data": list, "mapping": str},
+    "image": {"type": str, "width": int, "height": int, "data": list, "mapping": str,
+              "size": float},
     "black": {"type": str},
 }
 SHAPES = {
@@ -68,9 +69,14 @@ def _typed(value, kind, path):
         assert isinstance(value, kind), f"{path}: {type(value)}"
 
 
+OPTIONAL = {"size"}  # image surfaces: an optional size [mm] for xy mapping
+
+
 def _keys(d, spec, path):
-    assert set(d) == set(spec), f"{path}: keys {sorted(d)} != {sorted(spec)}"
+    assert set(d) - OPTIONAL == set(spec) - OPTIONAL, f"{path}: {sorted(d)} != {sorted(spec)}"
     for k, kind in spec.items():
+        if k not in d:
+            continue
         _typed(d[k], kind, f"{path}.{k}")
 
 
@@ -715,12 +721,13 @@ def test_image_texture_from_file(tmp_path):
 
     Image.fromarray(np.array([[0, 51, 255]], dtype=np.uint8), mode="L").save(tmp_path / "t.png")
     d = base()
-    d["surfaces"]["tex"] = {"type": "image", "file": "t.png", "scale": 0.5}
+    d["surfaces"]["tex"] = {"type": "image", "file": "t.png", "scale": 0.5, "size": 4}
     d["shapes"][3]["surface"] = "tex"
     out = scene_from_dict(d, base_dir=tmp_path).resolve(540)
     tex = out["surfaces"][1]
     assert (tex["width"], tex["height"], tex["mapping"]) == (3, 1, "uv")
-    assert tex["data"] == pytest.approx([0.0, 0.1, 0.5])
+    assert tex["data"] == pytest.approx([0.0, 0.1, 0.5]) and tex["size"] == 4.0
+    check_contract(out)
     d["surfaces"]["tex"]["file"] = "none.png"
     with pytest.raises(SceneError, match=r"surfaces\.tex\.file = 'none\.png': file not found"):
         scene_from_dict(d, base_dir=tmp_path)

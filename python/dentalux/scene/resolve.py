@@ -324,8 +324,11 @@ class Scene:
             img = self._images[name]
             data = img["data"] if s["scale"] == 1.0 else \
                 [min(1.0, x * s["scale"]) for x in img["data"]]
-            return {"type": "image", "width": img["width"], "height": img["height"],
-                    "data": data, "mapping": s["mapping"]}
+            out = {"type": "image", "width": img["width"], "height": img["height"],
+                   "data": data, "mapping": s["mapping"]}
+            if s["size"] is not None:
+                out["size"] = s["size"]
+            return out
         return {"type": "black"}
 
     def _light_at(self, i: int, wavelength_nm: float) -> dict:

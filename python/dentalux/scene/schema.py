@@ -76,7 +76,7 @@ SURFACE_KEYS = {
     "checker": {"type": "checker", "a": REQUIRED, "b": REQUIRED, "size": REQUIRED,
                 "mapping": "xy"},
     "image": {"type": "image", "file": None, "data": None, "width": None, "height": None,
-              "scale": 1.0, "mapping": "uv"},
+              "scale": 1.0, "mapping": "uv", "size": None},
     "black": {"type": "black"},
 }
 
@@ -391,6 +391,8 @@ def validate_surface(name: str, s: Any) -> dict:
     elif kind == "image":
         d["mapping"] = string(d["mapping"], f"{path}.mapping", ("xy", "uv"))
         d["scale"] = number(d["scale"], f"{path}.scale", lo=0.0, unit="")
+        if d["size"] is not None:
+            d["size"] = positive(d["size"], f"{path}.size")
         if (d["file"] is None) == (d["data"] is None):
             raise SceneError(f"{path}: give either file (an image) or data/width/height")
         if d["file"] is not None:
