@@ -2,6 +2,9 @@
 
 from collections.abc import Callable
 
+import numpy as np
+import numpy.typing as npt
+
 __version__: str
 
 LayerTuple = tuple[float, float, float, float, float, float, list[tuple[float, float]] | None]
@@ -30,3 +33,8 @@ def phase_eval(
     fd: float = 0.0,
     lobes: list[tuple[float, float]] | None = None,
 ) -> list[float]: ...
+def render_band(
+    scene_json: str,
+    settings_json: str,
+    progress: Callable[[int], None] | None = None,
+) -> tuple[npt.NDArray[np.float32], dict[str, float | int | str]]: ...

@@ -59,6 +59,8 @@ pub struct ShapeInstance {
     pub boundary: Boundary,
     /// Millimetres per unit of uv along u and v (for textures in mm).
     pub uv_scale: [f64; 2],
+    /// Whether the surface encloses a volume (all but quads and open meshes).
+    closed: bool,
 }
 
 impl ShapeInstance {
@@ -188,11 +190,17 @@ impl ShapeInstance {
             }
         };
         let s = transform.map_or(1.0, |t| t.scale());
+        let closed = match &geometry {
+            Geometry::Quad(_) => false,
+            Geometry::Mesh(m) => dielectric || m.topology() == Topology::Closed,
+            _ => true,
+        };
         Ok(Self {
             geometry,
             transform,
             boundary,
             uv_scale: [uv_scale[0] * s, uv_scale[1] * s],
+            closed,
         })
     }
 
@@ -248,11 +256,7 @@ impl ShapeInstance {
 
     /// Whether the shape is closed (everything but quads and open meshes).
     pub fn is_closed(&self) -> bool {
-        match &self.geometry {
-            Geometry::Quad(_) => false,
-            Geometry::Mesh(m) => m.topology() == Topology::Closed,
-            _ => true,
-        }
+        self.closed
     }
 
     /// Whether world point `p` lies inside this closed shape (false for open shapes).
@@ -264,7 +268,7 @@ impl ShapeInstance {
             Geometry::Cylinder(c) => c.contains(q),
             Geometry::Quad(_) => false,
             Geometry::Mesh(m) => {
-                if m.topology() != Topology::Closed {
+                if !self.closed {
                     return false;
                 }
                 // parity of crossings along an arbitrary, non-axis direction
