@@ -50,6 +50,7 @@ def fit_command(
     table: Path = typer.Option(None, help="CSV: wavelength_nm,tt,tr,n,g,thickness_mm[,fd,...]"),
     out: Path = typer.Option(None, help="material spectrum TOML to write (with --table)"),
     name: str = typer.Option(None, help="material name in the TOML (default: file stem)"),
+    description: str = typer.Option("", help="material description in the TOML"),
     as_json: bool = typer.Option(False, "--json", help="print JSON"),
 ) -> None:
     """Find μa and μs [1/mm] from total transmittance and reflectance of a disc."""
@@ -65,7 +66,8 @@ def fit_command(
         results = fit_table(table, progress=None if not as_json else False, fd=fd, **{
             k: v for k, v in opts.items() if k != "model"}, model=model)
         if out is not None:
-            write_spectrum_toml(results, out, name or out.stem, source=table.name)
+            write_spectrum_toml(results, out, name or out.stem, source=table.name,
+                                description=description)
         if as_json:
             print(json.dumps([dict(r.to_json(), wavelength_nm=r.wavelength_nm)
                               for r in results]))

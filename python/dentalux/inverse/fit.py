@@ -8,7 +8,8 @@ import numpy as np
 
 from dentalux.inverse.bounds import check_measurement, check_number
 from dentalux.inverse.models import MODELS, Sample, get_model
-from dentalux.inverse.optimise import LOG_LO, grid_start, solve
+from dentalux.inverse.models.boundary import specular
+from dentalux.inverse.optimise import LOG_HI, LOG_LO, grid_start, jacobian, solve
 from dentalux.inverse.result import FitResult
 
 DEFAULT_TOL = {"mc": 1e-3, "ad": 1e-5, "telegrapher": 1e-7, "km": 1e-7}
@@ -41,14 +42,25 @@ def _stand_in(sample: Sample, quad_pts):
         return get_model("telegrapher")
 
 
+def _multistart(model, sample: Sample, target: np.ndarray, tol: float):
+    """Solve a vectorised model from the best grid points until one converges."""
+    vec, scal = _vectorised(model, sample), _scalar(model, sample)
+    best = None
+    for x0 in grid_start(vec, target, k=6):
+        sol = solve(scal, target, x0, tol, jac_fun=vec)
+        if best is None or sol.residual < best.residual:
+            best = sol
+        if sol.converged:
+            break
+    return best
+
+
 def _start(fwd, sample: Sample, target: np.ndarray, quad_pts) -> np.ndarray:
     """Starting point: grid search (analytic models); the telegrapher / ad solution otherwise."""
     model_name = fwd.name
     if model_name in ("telegrapher", "km"):
         return grid_start(_vectorised(fwd, sample), target)
-    tel = get_model("telegrapher")
-    x = grid_start(_vectorised(tel, sample), target)
-    x = solve(_vectorised(tel, sample), target, x, 1e-7).x
+    x = _multistart(get_model("telegrapher"), sample, target, 1e-7).x
     if model_name == "mc":
         sub = _stand_in(sample, quad_pts)
         if sub.name == "ad":
@@ -95,7 +107,7 @@ def fit(tt: float, tr: float, n: float, g: float, thickness: float, model: str =
     fwd = get_model(model, photons=photons, seed=seed, estimator=estimator, quad_pts=quad_pts,
                     km_k2=km_k2)
     target = np.array([tt, tr])
-    x0 = _start(fwd, sample, target, quad_pts)
+    x0 = None if model in ("telegrapher", "km") else _start(fwd, sample, target, quad_pts)
 
     if model == "mc":
         jac_model = _stand_in(sample, quad_pts)
@@ -105,7 +117,7 @@ def fit(tt: float, tr: float, n: float, g: float, thickness: float, model: str =
         stderr = list(fwd.last_stderr)
     elif model in ("telegrapher", "km"):
         jac_model = fwd
-        sol = solve(_scalar(fwd, sample), target, x0, tol, jac_fun=_vectorised(fwd, sample))
+        sol = _multistart(fwd, sample, target, tol)
         stderr = None
     else:
         jac_model = fwd
@@ -126,26 +138,23 @@ def fit(tt: float, tr: float, n: float, g: float, thickness: float, model: str =
     if not sol.converged:
         notes.append(f"residual {sol.residual:.2e} above tol {tol:.1e}")
 
-    # Interval: first-order map of the +-err box onto (mua, mus); for mc its statistical
-    # error (2 standard errors) is added to the measurement uncertainty.
-    j_log = _jacobian_phys(jac_model, sample, sol.x)
-    j = j_log / np.array([mua, mus])[None, :]
+    # Interval: the +-err box of (TT, TR) mapped onto (mua, mus), both to first order and
+    # through its four corners (each solved with the cheap model, as a shift from that
+    # model's own solution), taking the hull; for mc its statistical error (2 standard
+    # errors) widens the box.
     err = np.array([tt_err, tr_err])
     if stderr is not None:
         err = err + 2.0 * np.asarray(stderr)
-    try:
-        m = np.linalg.inv(j)
-        half = np.abs(m) @ err
-    except np.linalg.LinAlgError:
-        half = np.array([np.inf, np.inf])
-    if not np.all(np.isfinite(half)):
-        half = np.where(np.isfinite(half), half, 1e30)
-    mua_lo, mua_hi = mua - half[0], mua + half[0]
-    mus_lo, mus_hi = max(mus - half[1], 0.0), mus + half[1]
-    resolved = mua_lo > 0.0
+    lo, hi = _interval(jac_model, sample, target, err, sol.x, np.array([mua, mus]))
+    mua_lo, mua_hi = float(lo[0]), float(hi[0])
+    mus_lo, mus_hi = float(lo[1]), float(hi[1])
+    resolved = mua_lo > 2.0 * float(np.exp(LOG_LO[0]))
     if not resolved:
         mua_lo = 0.0
         notes.append(f"mua not resolved: upper bound {mua_hi:.4g} 1/mm")
+    if tt - err[0] <= 0.0:
+        notes.append("tt is within its uncertainty of 0: the upper ends of the intervals "
+                     "are set by the search limits, not by the data")
 
     return FitResult(
         mua=mua, mus=mus, musp=mus * (1.0 - g), albedo=mus / (mua + mus),
@@ -160,7 +169,50 @@ def fit(tt: float, tr: float, n: float, g: float, thickness: float, model: str =
     )
 
 
-def _jacobian_phys(model, sample: Sample, x: np.ndarray) -> np.ndarray:
-    from dentalux.inverse.optimise import jacobian
+def _interval(model, sample: Sample, target: np.ndarray, err: np.ndarray, x_fit: np.ndarray,
+              mu_fit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) of (mua, mus) over the box target +- err, by ``model`` (a cheap one).
 
-    return jacobian(_vectorised(model, sample), x)
+    First order: half-widths |J^-1| err at the solution. Nonlinear: each corner of the box,
+    moved into the region no slab can leave (0 < TT <= T_clear, TT + TR <= 1, TR >= R0), is
+    solved from ``model``'s own solution at the target; the shift between the two is added to
+    the fitted value. Corners the model cannot reach are left out.
+    """
+    vec = _vectorised(model, sample)
+    scal = _scalar(model, sample)
+    j = jacobian(vec, x_fit) / mu_fit[None, :]
+    try:
+        half = np.abs(np.linalg.inv(j)) @ err
+    except np.linalg.LinAlgError:
+        half = np.full(2, np.inf)
+    half = np.where(np.isfinite(half), half, 1e30)
+    lo, hi = mu_fit - half, mu_fit + half
+
+    centre = solve(scal, target, x_fit, 1e-7, jac_fun=vec, max_iter=30,
+                   j0=jacobian(vec, x_fit))
+    if centre.residual < 1e-4:
+        jc = jacobian(vec, centre.x)
+        mu_c = np.exp(centre.x)
+        r0 = specular(sample.n, sample.n_out)
+        t_clear = (1.0 - r0) / (1.0 + r0)
+        tr_min = 1e-9 if sample.diffuse_only else r0 + 1e-9
+        for s_tt, s_tr in ((-1, -1), (-1, 1), (1, -1), (1, 1)):
+            c_tt = float(np.clip(target[0] + s_tt * err[0], 1e-9, t_clear - 1e-9))
+            c_tr = float(np.clip(target[1] + s_tr * err[1], tr_min, 1.0))
+            c_tr = min(c_tr, 1.0 - 1e-9 - c_tt)
+            try:
+                dx = np.linalg.solve(jc, np.array([c_tt, c_tr]) - centre.values)
+            except np.linalg.LinAlgError:
+                dx = np.zeros(2)
+            x_start = centre.x + np.clip(dx, -3.0, 3.0)
+            sol = solve(scal, np.array([c_tt, c_tr]), x_start, 1e-6, jac_fun=vec,
+                        max_iter=40, j0=jc)
+            if sol.residual > 1e-4:
+                continue
+            mu = mu_fit + (np.exp(sol.x) - mu_c)
+            lo, hi = np.minimum(lo, mu), np.maximum(hi, mu)
+    if target[0] - err[0] <= 0.0:
+        # TT is indistinguishable from 0: only TR constrains, which fixes a ratio of the
+        # coefficients but not their scale, so nothing bounds them from above.
+        hi = np.maximum(hi, np.exp(LOG_HI))
+    return np.maximum(lo, 0.0), hi
