@@ -193,7 +193,7 @@ fn ledger_surface_map_in_closed_sphere() {
         let e = maps
             .surface
             .surface_irradiance(d * 10.0, -d, 200, 5.0, &mut nb);
-        sum += e.value * 199.0 / 200.0;
+        sum += e.value;
     }
     let m = sum / 6.0;
     // k-NN estimate: relative sd ≈ 1/sqrt(k); six far-apart points are independent; the

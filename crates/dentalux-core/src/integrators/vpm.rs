@@ -17,12 +17,12 @@
 //! | setting | default | meaning |
 //! |---|---|---|
 //! | `k` | 64 | photons per estimate |
-//! | `radius` [mm] | 2 · cbrt(3 k V / (4π n)) per medium: twice the radius that holds k photons at the map's mean density (V: bounding box of the map's photons, n: its photons) | largest gathering radius |
+//! | `radius` [mm] | 2 · cbrt(3 k V / (4π n)) per medium: twice the radius that holds k photons at the map's mean density (V: bounding box of the map's photons, n: its photons); surface map: the 2-D analogue, at most 0.1 × scene diagonal | largest gathering radius |
 //! | `step` Δx [mm] | per medium min(0.5 / σt, scene diagonal / 64) | ray-marching step |
 
 use crate::control::Control;
 use crate::error::Result;
-use crate::geometry::{Hit, Ray};
+use crate::geometry::{Hit, Ray, Vec3};
 use crate::integrators::photon_trace::{trace_photons_with, Targets, SURFACE_PASS};
 use crate::integrators::photon_trace::{PhotonMaps, StoreMode};
 use crate::integrators::render::{render_tiles, Scratch, Settings, Stats};
@@ -142,9 +142,10 @@ impl<'a> Vpm<'a> {
                 MediumSetup { step, radius }
             })
             .collect();
-        let surface_radius = params
-            .radius
-            .unwrap_or_else(|| default_radius(&maps.surface, params.k, true));
+        // capped like the surface photon mapping integrator's default (0.1 × scene diagonal)
+        let surface_radius = params.radius.unwrap_or_else(|| {
+            default_radius(&maps.surface, params.k, true).min(super::pm::default_r_max(scene))
+        });
         Self {
             scene,
             maps,
@@ -172,6 +173,8 @@ impl<'a> Vpm<'a> {
     ) -> f64 {
         let scene = self.scene;
         let mut l = 0.0;
+        // the boundary plane where the ray entered its medium: (point, outward normal)
+        let mut entry: Option<(Vec3, Vec3)> = None;
         loop {
             let m = &scene.media[medium as usize];
             let hit = scene.intersect(&ray, f64::INFINITY);
@@ -183,7 +186,8 @@ impl<'a> Vpm<'a> {
                 l += beta * le * (-sigma_t * t).exp();
             }
             if sigma_t > 0.0 {
-                l += beta * self.march(&ray, medium, t_hit, rng, sc);
+                let exit = hit.map(|h| (h.p, if ray.d.dot(h.n) > 0.0 { h.n } else { -h.n }));
+                l += beta * self.march(&ray, medium, t_hit, [entry, exit], rng, sc);
                 beta *= (-sigma_t * t_hit).exp();
                 if beta == 0.0 {
                     return l;
@@ -235,6 +239,15 @@ impl<'a> Vpm<'a> {
                     }
                 }
             }
+            // the new ray leaves this boundary into its medium: remember the plane
+            entry = Some((
+                hit.p,
+                if ray.d.dot(hit.n) < 0.0 {
+                    hit.n
+                } else {
+                    -hit.n
+                },
+            ));
             // Russian roulette on the path weight (unbiased; no hard depth cut)
             if beta < RR_WEIGHT {
                 let survive = beta / RR_WEIGHT;
@@ -247,8 +260,18 @@ impl<'a> Vpm<'a> {
     }
 
     /// ∫_0^t_end e^(−σt s) S(x(s)) ds along `ray` in `medium` by jittered steps (eq. 11):
-    /// S = σs Σ_l L_l p (single scattering, `vpm` only) + Σ p ΔΦ / (4/3 π r³).
-    fn march(&self, ray: &Ray, medium: u32, t_end: f64, rng: &mut Stream, sc: &mut Scratch) -> f64 {
+    /// S = σs Σ_l L_l p (single scattering, `vpm` only) + Σ p ΔΦ / V, V the gathering sphere
+    /// 4/3 π r³ less the cap cut off by the nearer of the boundary planes where the ray
+    /// entered and leaves the medium (`planes`: point, outward normal).
+    fn march(
+        &self,
+        ray: &Ray,
+        medium: u32,
+        t_end: f64,
+        planes: [Option<(Vec3, Vec3)>; 2],
+        rng: &mut Stream,
+        sc: &mut Scratch,
+    ) -> f64 {
         let scene = self.scene;
         let m = &scene.media[medium as usize];
         if m.sigma_s <= 0.0 {
@@ -291,8 +314,19 @@ impl<'a> Vpm<'a> {
                 }
             }
             if !map.is_empty() {
-                let e =
-                    map.volume_radiance(x, wo, &m.phase, self.params.k, setup.radius, &mut sc.nb);
+                // the nearer of the entry and exit planes clips the gathering sphere
+                let plane = planes
+                    .iter()
+                    .flatten()
+                    .min_by(|a, b| {
+                        (a.0 - x)
+                            .dot(a.1)
+                            .abs()
+                            .total_cmp(&(b.0 - x).dot(b.1).abs())
+                    })
+                    .copied();
+                let (k, r) = (self.params.k, setup.radius);
+                let e = map.volume_radiance_clipped(x, wo, &m.phase, k, r, plane, &mut sc.nb);
                 sc.radius_sum += e.radius;
                 sc.estimates += 1;
                 src += e.value;

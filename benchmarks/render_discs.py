@@ -1,0 +1,137 @@
+"""Volume photon mapping on the paper's Fig. 3 scene (two 5 mm discs, scenes/discs.toml), at
+540 nm: photon tracing rate, kd-tree build time, bytes per photon, render time, peak memory,
+and how long the unbiased `volpath` needs for the error `vpm` reaches (issue 5).
+
+Material: the library's `biomaterial-table1` (fitted to the paper's Table 1) by default;
+`--stand-in` uses the issue's stand-in values at 540 nm (mua 0.17/mm, mus 5.9/mm, g 0.75,
+n 1.54) instead.
+
+Error measure: per-pixel relative RMSE, sqrt(mean (I - R)^2) / mean(R).
+- volpath is unbiased, so its error is its noise: two independent halves A and B give the
+  per-sample variance (E[(A - B)^2] = 2 var(half)), and the time volpath needs for an error e is
+  t_spp * mean var_1spp / (e * mean)^2, measured, not guessed.
+- volpath cannot give a 2 %-accurate per-pixel reference on two cores in reasonable time (its
+  own estimate is printed), so vpm's error is measured against a converged vpm-full render R
+  (--ref-photons, --ref-spp-vpm); R's image mean is checked against volpath's (printed with
+  its standard error), and the tests (crates/dentalux-core/tests/volume_transport.rs) check
+  per-pixel convergence to volpath on a small disc scene.
+Targets (issue 5): vpm reaches 2 % relative RMSE at least 10x sooner than volpath; 100 M
+photons fit in under 3 GB (--memory-photons 100000000).
+
+The default resolution is 128x96 (the issue's 512x384 with --resolution 512x384; volpath's
+reference then takes hours on two cores). Timings are wall-clock on a possibly shared machine;
+the load average is printed.
+
+    .venv/bin/python benchmarks/render_discs.py [--resolution 128x96] [--ref-spp 2048]
+        [--ladder 250000:4,1000000:8,4000000:16] [--memory-photons 0] [--stand-in]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import time
+from pathlib import Path
+
+import dentalux
+import numpy as np
+from dentalux.scene.load import read_toml
+
+SCENE = Path(__file__).resolve().parent.parent / "scenes" / "discs.toml"
+STAND_IN = {"mua": 0.17, "mus": 5.9, "g": 0.75, "n": 1.54}
+BAND = 540.0
+
+
+def scene_dict(stand_in: bool) -> dict:
+    """scenes/discs.toml as a dict, with the stand-in medium if asked."""
+    d = read_toml(SCENE)
+    if stand_in:
+        d["media"]["disc"] = dict(STAND_IN)
+    return d
+
+
+def peak_rss_gb() -> float:
+    """Peak resident memory of this process [GB] (Linux reports KiB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2
+
+
+def render(scene: dict, res, **kw):
+    """One band at 540 nm; returns (image, stats of the band, wall seconds)."""
+    t = time.perf_counter()
+    r = dentalux.render(scene, bands=[BAND], resolution=res, progress=False, **kw)
+    return r.radiance[..., 0].astype(np.float64), r.stats["bands"][0], time.perf_counter() - t
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--resolution", default="128x96")
+    ap.add_argument("--ref-spp", type=int, default=512, help="volpath samples/px (two halves)")
+    ap.add_argument("--ref-photons", type=int, default=16_000_000,
+                    help="volume photons of the converged vpm-full reference")
+    ap.add_argument("--ref-spp-vpm", type=int, default=64, help="spp of the vpm-full reference")
+    ap.add_argument("--ladder", default="250000:4,1000000:8,4000000:16",
+                    help="vpm runs as volume_photons:spp pairs")
+    ap.add_argument("--surface-photons", type=int, default=200_000)
+    ap.add_argument("--memory-photons", type=int, default=0,
+                    help="also trace this many volume photons and report memory")
+    ap.add_argument("--stand-in", action="store_true", help="issue 5's stand-in medium")
+    args = ap.parse_args()
+    w, h = (int(x) for x in args.resolution.lower().split("x"))
+    res = (w, h)
+    scene = scene_dict(args.stand_in)
+    print(f"# discs.toml at {BAND} nm, {w}x{h}, material "
+          f"{'stand-in ' + str(STAND_IN) if args.stand_in else 'biomaterial-table1 (library)'}")
+    print(f"# cpus {os.cpu_count()}, load average {os.getloadavg()}")
+
+    # volpath: two independent halves give its noise per sample
+    half = max(1, args.ref_spp // 2)
+    a, _, ta = render(scene, res, integrator="volpath", spp=half, seed=1001)
+    b, _, tb = render(scene, res, integrator="volpath", spp=half, seed=2002)
+    vp = 0.5 * (a + b)
+    mean_vp = vp.mean()
+    var_half = np.mean((a - b) ** 2) / 2.0  # per-pixel variance of a half, image average
+    var_1spp = var_half * half
+    se_mean_vp = np.sqrt(np.sum((a - b) ** 2) / 4.0) / vp.size  # s.e. of the image mean
+    t_spp = (ta + tb) / (2 * half)  # seconds per sample per pixel, whole image
+    t_vp_2 = t_spp * var_1spp / (0.02 * mean_vp) ** 2
+    print(f"volpath: {2 * half} spp in {ta + tb:.1f} s, image mean {mean_vp:.5g} "
+          f"+- {se_mean_vp:.2g}, own rel. RMSE {np.sqrt(var_half / 2) / mean_vp:.4f}; "
+          f"needs {t_vp_2:.0f} s for 2 % rel. RMSE")
+
+    ref, st, t_ref = render(scene, res, integrator="vpm-full", spp=args.ref_spp_vpm, seed=3003,
+                            volume_photons=args.ref_photons, photons=args.ref_photons // 4)
+    mean_ref = ref.mean()
+    print(f"reference: vpm-full {args.ref_photons} photons, {args.ref_spp_vpm} spp in "
+          f"{t_ref:.1f} s, image mean {mean_ref:.5g} ({(mean_ref - mean_vp) / mean_vp:+.4f} "
+          f"vs volpath, whose s.e. is {se_mean_vp / mean_vp:.4f})")
+
+    print("| volume photons | spp | photons/s | build s | bytes/photon | stored | camera s "
+          "| total s | rel. RMSE | volpath s for same RMSE | speed-up | peak RSS GB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for rung in args.ladder.split(","):
+        photons, spp = (int(float(x)) for x in rung.split(":"))
+        for integrator in ("vpm", "vpm-full"):
+            img, st, wall = render(scene, res, integrator=integrator, spp=spp, seed=7,
+                                   volume_photons=photons, photons=args.surface_photons)
+            err = np.sqrt(np.mean((img - ref) ** 2)) / mean_ref
+            t_vp = t_spp * var_1spp / (err * mean_vp) ** 2 if err > 0 else float("inf")
+            rate = (photons + args.surface_photons) / max(st["seconds_photons"], 1e-9)
+            print(f"| {integrator} {photons} | {spp} | {rate:.3g} | {st['seconds_build']:.2f} "
+                  f"| {st['bytes_per_photon']} | {st['photons_stored']} "
+                  f"| {st['seconds_camera']:.1f} | {wall:.1f} | {err:.4f} | {t_vp:.0f} "
+                  f"| {t_vp / wall:.1f}x | {peak_rss_gb():.2f} |")
+
+    if args.memory_photons > 0:
+        before = peak_rss_gb()
+        _, st, wall = render(scene, (8, 6), integrator="vpm-full", spp=1, seed=9,
+                             volume_photons=args.memory_photons, photons=1000)
+        print(f"memory: {args.memory_photons} photons emitted, {st['photons_stored']} stored, "
+              f"maps {st['photon_map_bytes'] / 1e9:.2f} GB "
+              f"({st['bytes_per_photon']} bytes/photon), tracing {st['seconds_photons']:.1f} s, "
+              f"build {st['seconds_build']:.1f} s, peak RSS {peak_rss_gb():.2f} GB "
+              f"(before {before:.2f} GB)")
+
+
+if __name__ == "__main__":
+    main()
