@@ -240,6 +240,21 @@ fn dist2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
     dx * dx + dy * dy + dz * dz
 }
 
+/// Ratio of the full sphere of radius `r` [mm] around `x` to its part behind the plane
+/// (point, unit outward normal): 4/3 π r³ / (4/3 π r³ − π (r − h)² (2r + h) / 3), h the distance
+/// of `x` from the plane (1 when h ≥ r or no plane).
+pub fn clip_factor(x: Vec3, r: f64, plane: Option<(Vec3, Vec3)>) -> f64 {
+    let Some((p0, n)) = plane else {
+        return 1.0;
+    };
+    let h = (p0 - x).dot(n).max(0.0);
+    if h >= r || r <= 0.0 {
+        return 1.0;
+    }
+    let full = 4.0 / 3.0 * PI * r * r * r;
+    full / (full - PI * (r - h) * (r - h) * (2.0 * r + h) / 3.0)
+}
+
 /// Gathering radius of a k-nearest query and the factor that makes its estimate unbiased
 /// for a uniform density: when k photons were found the radius is the k-th distance and that
 /// photon sits on the sphere, so Σ ΔΦ / V over k photons overestimates by k/(k − 1)
@@ -413,15 +428,7 @@ impl PhotonMap {
         nb: &mut Neighbours,
     ) -> Estimate {
         let mut e = self.volume_radiance(x, wo, phase, k, r_max, nb);
-        if let Some((p0, n)) = plane {
-            let r = e.radius;
-            let h = (p0 - x).dot(n).max(0.0);
-            if h < r && e.value > 0.0 {
-                let full = 4.0 / 3.0 * PI * r * r * r;
-                let cap = PI * (r - h) * (r - h) * (2.0 * r + h) / 3.0;
-                e.value *= full / (full - cap);
-            }
-        }
+        e.value *= clip_factor(x, e.radius, plane);
         e
     }
 
@@ -442,6 +449,24 @@ impl PhotonMap {
         });
         Estimate {
             value: sum / (4.0 / 3.0 * PI * r * r * r),
+            radius: r,
+            count,
+        }
+    }
+
+    /// Irradiance with a fixed radius `r` [mm] (progressive photon mapping):
+    /// Σ_{|x_p − x| ≤ r, d_p · n < 0} ΔΦ_p / (π r²).
+    pub fn surface_irradiance_radius(&self, x: Vec3, n: Vec3, r: f64) -> Estimate {
+        let mut sum = 0.0;
+        let mut count = 0;
+        self.for_each_within(x, r, |p, _| {
+            if p.direction().dot(n) < 0.0 {
+                sum += p.power as f64;
+                count += 1;
+            }
+        });
+        Estimate {
+            value: sum / (PI * r * r),
             radius: r,
             count,
         }

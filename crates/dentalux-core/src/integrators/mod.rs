@@ -4,6 +4,7 @@
 //!   an integrating sphere measures (total transmittance, reflectance, absorption).
 //! - [`photon_trace`]: the photon pass (eqs. 1–10) filling volume and surface photon maps.
 //! - [`vpm`]: volume photon mapping's camera pass (eqs. 11–13), modes `vpm` and `vpm-full`.
+//! - [`ppm`]: probabilistic progressive photon mapping (bounded memory, consistent).
 //! - [`volpath`]: the unbiased volumetric path tracer that judges them.
 //! - [`transport`]: boundary crossing, shadow-ray transmittance (eqs. 12–13), ray spawning.
 
@@ -15,3 +16,4 @@ pub mod volpath;
 pub mod path;
 pub mod pm;
 pub mod render;
+pub mod ppm;

@@ -277,11 +277,7 @@ pub fn render_band(
         Integrator::Vpm => super::vpm::render(scene, settings, control, false)?,
         Integrator::VpmFull => super::vpm::render(scene, settings, control, true)?,
         Integrator::Volpath => super::volpath::render(scene, settings, control)?,
-        other => {
-            return Err(Error::InvalidInput(format!(
-                "settings.integrator = {other:?} is not available in this build"
-            )))
-        }
+        Integrator::Ppm => super::ppm::render(scene, settings, control)?,
     };
     stats.seconds_total = t0.elapsed().as_secs_f64();
     stats.spp = settings.spp;

@@ -27,7 +27,7 @@ use crate::integrators::photon_trace::{trace_photons_with, Targets, SURFACE_PASS
 use crate::integrators::photon_trace::{PhotonMaps, StoreMode};
 use crate::integrators::render::{render_tiles, Scratch, Settings, Stats};
 use crate::integrators::transport::{cross, eq13_transmittance, spawn, straight_transmittance};
-use crate::photon_map::{PhotonMap, PHOTON_BYTES};
+use crate::photon_map::{clip_factor, PhotonMap, PHOTON_BYTES};
 use crate::rng::Stream;
 use crate::scene::{Boundary, Scene};
 use std::f64::consts::PI;
@@ -85,10 +85,13 @@ pub struct Vpm<'a> {
     pub media: Vec<MediumSetup>,
     /// Resolved radius of the surface map [mm].
     pub surface_radius: f64,
+    /// Gather every photon within the radii above instead of the k nearest (progressive
+    /// photon mapping sets this and the radii of its pass).
+    pub fixed_radius: bool,
 }
 
 /// Twice the radius of a ball holding `k` photons at the map's mean density.
-fn default_radius(map: &PhotonMap, k: usize, flat: bool) -> f64 {
+pub(crate) fn default_radius(map: &PhotonMap, k: usize, flat: bool) -> f64 {
     if map.is_empty() {
         return 1.0;
     }
@@ -152,6 +155,7 @@ impl<'a> Vpm<'a> {
             params,
             media,
             surface_radius,
+            fixed_radius: false,
         }
     }
 
@@ -326,7 +330,13 @@ impl<'a> Vpm<'a> {
                     })
                     .copied();
                 let (k, r) = (self.params.k, setup.radius);
-                let e = map.volume_radiance_clipped(x, wo, &m.phase, k, r, plane, &mut sc.nb);
+                let e = if self.fixed_radius {
+                    let mut e = map.volume_radiance_radius(x, wo, &m.phase, r);
+                    e.value *= clip_factor(x, r, plane);
+                    e
+                } else {
+                    map.volume_radiance_clipped(x, wo, &m.phase, k, r, plane, &mut sc.nb)
+                };
                 sc.radius_sum += e.radius;
                 sc.estimates += 1;
                 src += e.value;
@@ -366,11 +376,13 @@ impl<'a> Vpm<'a> {
             sc.rays += 1;
         }
         if !self.maps.surface.is_empty() {
-            e += self
-                .maps
-                .surface
-                .surface_irradiance(hit.p, n, self.params.k, self.surface_radius, &mut sc.nb)
-                .value;
+            e += if self.fixed_radius {
+                self.maps.surface.surface_irradiance_radius(hit.p, n, self.surface_radius)
+            } else {
+                let (k, r) = (self.params.k, self.surface_radius);
+                self.maps.surface.surface_irradiance(hit.p, n, k, r, &mut sc.nb)
+            }
+            .value;
         }
         e
     }
