@@ -28,6 +28,23 @@ fn arg(name: &str, default: u64) -> u64 {
         .unwrap_or(default)
 }
 
+/// CPU seconds this process has used (user + system, from /proc/self/stat; Linux only,
+/// 0 elsewhere): on a shared machine the single-thread rate per CPU second is steadier than
+/// per wall-clock second.
+fn cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0.0;
+    };
+    // fields after the parenthesised command name; utime and stime are fields 14 and 15
+    let rest = stat.rsplit(')').next().unwrap_or("");
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = [11, 12]
+        .iter()
+        .filter_map(|&i| f.get(i)?.parse::<f64>().ok())
+        .sum();
+    ticks / 100.0 // USER_HZ is 100 on Linux
+}
+
 fn main() {
     let triangles = arg("--triangles", 1_000_000);
     let n_rays = arg("--rays", 1_000_000);
@@ -44,6 +61,19 @@ fn main() {
     let bvh = Bvh::build(&bounds);
     let build_s = t0.elapsed().as_secs_f64();
     let nodes = bvh.node_count();
+    let mut tests = 0u64;
+    let mut prng = Stream::new(2, 0, 0);
+    for _ in 0..10_000 {
+        let o = uniform_sphere(prng.uniform2()) * 30.0;
+        let t = uniform_sphere(prng.uniform2()) * (12.0 * prng.uniform());
+        let r = Ray::new(o, t - o);
+        bvh.nearest(&r, f64::INFINITY, |slot, tm| {
+            tests += 1;
+            let i = bvh.order()[slot as usize] as usize;
+            mesh.intersect_triangle(i, r.o, r.d, tm).map(|h| h.t)
+        });
+    }
+    let tests_per_ray = tests as f64 / 10_000.0;
     let t1 = Instant::now();
     let shape = ShapeInstance::new(
         "mesh",
@@ -74,11 +104,13 @@ fn main() {
         })
         .collect();
     let t2 = Instant::now();
+    let c2 = cpu_seconds();
     let hits_1: usize = rays
         .iter()
         .filter(|r| scene.intersect(r, f64::INFINITY).is_some())
         .count();
     let one_s = t2.elapsed().as_secs_f64();
+    let one_cpu = cpu_seconds() - c2;
     let t3 = Instant::now();
     let hits_n: usize = rays
         .par_iter()
@@ -88,10 +120,12 @@ fn main() {
     assert_eq!(hits_1, hits_n);
     println!(
         "{{\"triangles\": {n_tris}, \"bvh_nodes\": {nodes}, \"bvh_build_seconds\": {build_s:.3}, \
-\"scene_build_seconds\": {scene_s:.3}, \"rays\": {n_rays}, \"hit_fraction\": {:.3}, \
-\"rays_per_second_1_thread\": {:.0}, \"rays_per_second_all_threads\": {:.0}, \"threads\": {}}}",
+\"scene_build_seconds\": {scene_s:.3}, \"triangle_tests_per_ray\": {tests_per_ray:.2}, \"rays\": {n_rays}, \"hit_fraction\": {:.3}, \
+\"rays_per_second_1_thread\": {:.0}, \"rays_per_cpu_second_1_thread\": {:.0}, \
+\"rays_per_second_all_threads\": {:.0}, \"threads\": {}}}",
         hits_1 as f64 / n_rays as f64,
         n_rays as f64 / one_s,
+        n_rays as f64 / one_cpu,
         n_rays as f64 / all_s,
         rayon::current_num_threads()
     );

@@ -17,16 +17,66 @@ const BINS: usize = 12;
 /// Deepest tree allowed (the traversal stack holds this many entries).
 const MAX_DEPTH: usize = 96;
 
-/// One flattened node.
+/// One flattened node, 32 bytes: bounds stored as f32 rounded outwards (so the box still
+/// holds its f64 contents; intersections themselves stay f64), which halves the memory a
+/// traversal pulls through the cache on large meshes.
 #[derive(Debug, Clone, Copy)]
 struct Node {
-    bounds: Aabb,
+    lo: [f32; 3],
+    hi: [f32; 3],
     /// Leaf: index of the first primitive in `order`; interior: index of the right child.
     offset: u32,
-    /// Number of primitives (0 for an interior node).
-    count: u32,
-    /// Split axis of an interior node (traversal visits the near child first).
-    axis: u8,
+    /// Number of primitives (0 for an interior node) in the low 30 bits; split axis of an
+    /// interior node (traversal visits the near child first) in the top 2.
+    count_axis: u32,
+}
+
+/// f32 not above `x`.
+#[inline]
+fn f32_down(x: f64) -> f32 {
+    let f = x as f32;
+    if f as f64 > x {
+        f.next_down()
+    } else {
+        f
+    }
+}
+
+/// f32 not below `x`.
+#[inline]
+fn f32_up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
+impl Node {
+    fn new(b: &Aabb, offset: usize, count: usize) -> Self {
+        Self {
+            lo: [f32_down(b.min.x), f32_down(b.min.y), f32_down(b.min.z)],
+            hi: [f32_up(b.max.x), f32_up(b.max.y), f32_up(b.max.z)],
+            offset: offset as u32,
+            count_axis: count as u32,
+        }
+    }
+    #[inline]
+    fn count(&self) -> u32 {
+        self.count_axis & 0x3FFF_FFFF
+    }
+    #[inline]
+    fn axis(&self) -> usize {
+        (self.count_axis >> 30) as usize
+    }
+    #[inline]
+    fn bounds(&self) -> Aabb {
+        Aabb {
+            min: Vec3::new(self.lo[0] as f64, self.lo[1] as f64, self.lo[2] as f64),
+            max: Vec3::new(self.hi[0] as f64, self.hi[1] as f64, self.hi[2] as f64),
+        }
+    }
 }
 
 /// A BVH over primitives identified by their index in the slice given to [`Bvh::build`].
@@ -59,6 +109,11 @@ impl Bvh {
         Self { nodes, order }
     }
 
+    /// The primitive in each slot: leaves hold consecutive slots.
+    pub fn order(&self) -> &[u32] {
+        &self.order
+    }
+
     /// Number of nodes.
     pub fn node_count(&self) -> usize {
         self.nodes.len()
@@ -66,12 +121,14 @@ impl Bvh {
 
     /// Bounds of everything (empty box when there are no primitives).
     pub fn bounds(&self) -> Aabb {
-        self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds)
+        self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds())
     }
 
-    /// Visit primitives whose boxes the ray meets before `t_max`, near first. `test(prim,
-    /// t_max)` returns the distance of a hit closer than `t_max` (then the search shrinks
-    /// to it), or `None`. Returns the nearest distance found.
+    /// Visit primitives whose boxes the ray meets before `t_max`, near first. `test(slot,
+    /// t_max)` — `slot` indexes [`Bvh::order`], whose entry is the primitive — returns the
+    /// distance of a hit closer than `t_max` (then the search shrinks to it), or `None`.
+    /// Returns the nearest distance found. Callers that store their primitives in slot order
+    /// read a leaf's primitives from contiguous memory.
     #[inline]
     pub fn nearest<F: FnMut(u32, f64) -> Option<f64>>(
         &self,
@@ -91,7 +148,8 @@ impl Bvh {
         found.then_some(best)
     }
 
-    /// Whether `test(prim, t_max)` is true for any primitive whose box the ray meets.
+    /// Whether `test(slot, t_max)` is true for any primitive whose box the ray meets (`slot`
+    /// as in [`Bvh::nearest`]).
     #[inline]
     pub fn any<F: FnMut(u32, f64) -> bool>(&self, ray: &Ray, t_max: f64, mut test: F) -> bool {
         let mut best = t_max;
@@ -124,7 +182,7 @@ impl Bvh {
         let mut top = 0;
         let mut current = 0usize;
         if self.nodes[0]
-            .bounds
+            .bounds()
             .hit_distance(ray.o, inv_d, *t_max)
             .is_infinite()
         {
@@ -132,10 +190,10 @@ impl Bvh {
         }
         loop {
             let node = &self.nodes[current];
-            if node.count > 0 {
+            if node.count() > 0 {
                 let first = node.offset as usize;
-                for &prim in &self.order[first..first + node.count as usize] {
-                    let (closer, stop) = visit(prim, *t_max);
+                for slot in first..first + node.count() as usize {
+                    let (closer, stop) = visit(slot as u32, *t_max);
                     if let Some(t) = closer {
                         *t_max = t;
                     }
@@ -145,11 +203,11 @@ impl Bvh {
                 }
             } else {
                 let (mut near, mut far) = (current + 1, node.offset as usize);
-                if neg[node.axis as usize] {
+                if neg[node.axis()] {
                     std::mem::swap(&mut near, &mut far);
                 }
-                let tn = self.nodes[near].bounds.hit_distance(ray.o, inv_d, *t_max);
-                let tf = self.nodes[far].bounds.hit_distance(ray.o, inv_d, *t_max);
+                let tn = self.nodes[near].bounds().hit_distance(ray.o, inv_d, *t_max);
+                let tf = self.nodes[far].bounds().hit_distance(ray.o, inv_d, *t_max);
                 match (tn.is_finite(), tf.is_finite()) {
                     (true, true) => {
                         // visit the closer box first, keep the other for later
@@ -178,7 +236,7 @@ impl Bvh {
                 top -= 1;
                 let n = stack[top] as usize;
                 if self.nodes[n]
-                    .bounds
+                    .bounds()
                     .hit_distance(ray.o, inv_d, *t_max)
                     .is_finite()
                 {
@@ -206,12 +264,7 @@ fn build_node(
         bounds = bounds.union(&it.bounds);
         cbounds = cbounds.grow(it.centroid);
     }
-    nodes.push(Node {
-        bounds,
-        offset: start as u32,
-        count: (end - start) as u32,
-        axis: 0,
-    });
+    nodes.push(Node::new(&bounds, start, end - start));
     let n = end - start;
     if n <= 1 || depth >= MAX_DEPTH {
         return index;
@@ -283,8 +336,7 @@ fn build_node(
     if mid == start || mid == end {
         return index;
     }
-    nodes[index].count = 0;
-    nodes[index].axis = axis as u8;
+    nodes[index].count_axis = (axis as u32) << 30;
     build_node(nodes, items, order, start, mid, depth + 1);
     let right = build_node(nodes, items, order, mid, end, depth + 1);
     nodes[index].offset = right as u32;
@@ -322,14 +374,18 @@ mod tests {
                 .filter_map(|s| s.intersect(ray.o, ray.d, t_max).map(|h| h.t))
                 .fold(f64::INFINITY, f64::min);
             let got = bvh.nearest(&ray, t_max, |i, tm| {
-                spheres[i as usize].intersect(ray.o, ray.d, tm).map(|h| h.t)
+                spheres[bvh.order()[i as usize] as usize]
+                    .intersect(ray.o, ray.d, tm)
+                    .map(|h| h.t)
             });
             match got {
                 Some(t) => assert_eq!(t, brute),
                 None => assert!(brute.is_infinite()),
             }
             let any = bvh.any(&ray, t_max, |i, tm| {
-                spheres[i as usize].intersect(ray.o, ray.d, tm).is_some()
+                spheres[bvh.order()[i as usize] as usize]
+                    .intersect(ray.o, ray.d, tm)
+                    .is_some()
             });
             assert_eq!(any, brute.is_finite());
         }

@@ -66,29 +66,17 @@ impl TriangleMesh {
     #[inline]
     pub fn intersect_triangle(&self, i: usize, o: Vec3, d: Vec3, t_max: f64) -> Option<LocalHit> {
         let [a, b, c] = self.corners(i);
-        let e1 = b - a;
-        let e2 = c - a;
-        let pv = d.cross(e2);
-        let det = e1.dot(pv);
-        if det == 0.0 {
-            return None;
-        }
-        let inv = 1.0 / det;
-        let tv = o - a;
-        let b1 = tv.dot(pv) * inv;
-        if !(0.0..=1.0).contains(&b1) {
-            return None;
-        }
-        let qv = tv.cross(e1);
-        let b2 = d.dot(qv) * inv;
-        if b2 < 0.0 || b1 + b2 > 1.0 {
-            return None;
-        }
-        let t = e2.dot(qv) * inv;
-        if !(t > 0.0 && t < t_max) {
-            return None;
-        }
-        let uv = match &self.uvs {
+        let (t, b1, b2) = intersect_corners(a, b, c, o, d, t_max)?;
+        Some(LocalHit {
+            t,
+            n: (b - a).cross(c - a),
+            uv: self.uv_at(i, b1, b2),
+        })
+    }
+    /// uv of triangle `i` at barycentric (b1, b2): the interpolated vertex uvs, or (b1, b2).
+    #[inline]
+    pub fn uv_at(&self, i: usize, b1: f64, b2: f64) -> [f64; 2] {
+        match &self.uvs {
             Some(uvs) => {
                 let [ia, ib, ic] = self.triangles[i];
                 let (ua, ub, uc) = (uvs[ia as usize], uvs[ib as usize], uvs[ic as usize]);
@@ -99,12 +87,7 @@ impl TriangleMesh {
                 ]
             }
             None => [b1, b2],
-        };
-        Some(LocalHit {
-            t,
-            n: e1.cross(e2),
-            uv,
-        })
+        }
     }
     /// Closedness and orientation consistency, from directed-edge counts.
     pub fn topology(&self) -> Topology {
@@ -185,6 +168,39 @@ impl TriangleMesh {
             uvs: None,
         }
     }
+}
+
+/// Möller–Trumbore on corners (a, b, c): (t, b1, b2) of the hit with t in (0, t_max), b1 and
+/// b2 the barycentric weights of b and c.
+#[inline]
+pub fn intersect_corners(
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+    o: Vec3,
+    d: Vec3,
+    t_max: f64,
+) -> Option<(f64, f64, f64)> {
+    let e1 = b - a;
+    let e2 = c - a;
+    let pv = d.cross(e2);
+    let det = e1.dot(pv);
+    if det == 0.0 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = o - a;
+    let b1 = tv.dot(pv) * inv;
+    if !(0.0..=1.0).contains(&b1) {
+        return None;
+    }
+    let qv = tv.cross(e1);
+    let b2 = d.dot(qv) * inv;
+    if b2 < 0.0 || b1 + b2 > 1.0 {
+        return None;
+    }
+    let t = e2.dot(qv) * inv;
+    (t > 0.0 && t < t_max).then_some((t, b1, b2))
 }
 
 #[cfg(test)]
