@@ -758,3 +758,23 @@ def test_cli_render_hands_equal_energy_radiance_to_colour(fake_core, tmp_path, m
     assert seen["radiance"][0, 0, 0] == pytest.approx(450 / 1.17008, rel=1e-5)
     assert seen["radiance"][0, 0, 1] == pytest.approx(560.0)
     assert json.loads(capsys.readouterr().out)["colour"] == {"illuminant": "D65"}
+
+
+def test_cli_volume_options_reach_the_core(fake_core, tmp_path, capsys):
+    """Issue 5's flags: --integrator, --photons, --volume-photons, --k, --radius, --step."""
+    with pytest.raises(SystemExit) as exc:
+        main(["render", str(CORNELL), "--out", str(tmp_path), "--integrator", "vpm-full",
+              "--photons", "123", "--volume-photons", "456", "--k", "16", "--radius", "0.5",
+              "--step", "0.1", "--threads", "2", "--bands", "540", "--resolution", "4x3",
+              "--json"])
+    assert exc.value.code == 0
+    settings = fake_core.calls[0][1]
+    assert (settings["integrator"], settings["photons"], settings["volume_photons"],
+            settings["k"], settings["radius"], settings["step"], settings["threads"]) == \
+        ("vpm-full", 123, 456, 16, 0.5, 0.1, 2)
+    assert json.loads(capsys.readouterr().out)["settings"]["integrator"] == "vpm-full"
+
+
+def test_render_with_progress_bar(fake_core):
+    res = dentalux.render(cornell_box(resolution=(3, 2)), bands=[450, 540], progress=True)
+    assert res.radiance.shape == (2, 3, 2) and len(fake_core.calls) == 2
