@@ -122,6 +122,7 @@ class Scene:
         self._files: dict[str, str] = {}
         self._images = self._load_images()
         self._shapes = [self._shape(i, s) for i, s in enumerate(d["shapes"])]
+        self._shapes_json: str | None = None
         self._check_camera()
         # Resolve at every default band: unknown material names and tables that miss a
         # band fail here, at load time, rather than mid-render.
@@ -372,5 +373,11 @@ class Scene:
         }
 
     def to_json(self, wavelength_nm: float, resolution: tuple[int, int] | None = None) -> str:
-        """:meth:`resolve` as the JSON string ``render_band`` takes."""
-        return json.dumps(self.resolve(wavelength_nm, resolution), separators=(",", ":"))
+        """:meth:`resolve` as the JSON string ``render_band`` takes. The shapes (band
+        independent, and large for meshes) are serialised once and reused for every band."""
+        d = self.resolve(wavelength_nm, resolution)
+        del d["shapes"]
+        if self._shapes_json is None:
+            self._shapes_json = json.dumps(self._shapes, separators=(",", ":"))
+        head = json.dumps(d, separators=(",", ":"))
+        return head[:-1] + ',"shapes":' + self._shapes_json + "}"
