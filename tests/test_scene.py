@@ -778,3 +778,23 @@ def test_cli_volume_options_reach_the_core(fake_core, tmp_path, capsys):
 def test_render_with_progress_bar(fake_core):
     res = dentalux.render(cornell_box(resolution=(3, 2)), bands=[450, 540], progress=True)
     assert res.radiance.shape == (2, 3, 2) and len(fake_core.calls) == 2
+
+
+def test_nested_media_must_be_declared_consistently():
+    """A dentin core inside an enamel shell: outside = 'enamel' is required."""
+    d = base()
+    d["media"]["dentin"] = {"mua": 0.3, "mus": 20.0, "g": 0.9, "n": 1.5}
+    d["shapes"] = [
+        {"type": "sphere", "center": [0, 0, 5], "radius": 3.0, "inside": "enamel"},
+        {"type": "cylinder", "center": [0, 0, 4], "radius": 1.0, "height": 2.0,
+         "inside": "dentin", "outside": "air"},
+    ]
+    with pytest.raises(SceneError, match=r"shapes\[1\]\.outside = 'air': shapes\[1\] lies "
+                                         r"inside shapes\[0\], whose inside medium is 'enamel'"):
+        scene_from_dict(d)
+    d["shapes"][1]["outside"] = "enamel"
+    media = [m["name"] for m in scene_from_dict(d).resolve(540)["media"]]
+    assert media == ["air", "enamel", "dentin"]
+    # Moved so that it pokes out of the sphere: not contained, no constraint.
+    d["shapes"][1].update(center=[0, 0, 7], outside="air")
+    scene_from_dict(d)

@@ -124,6 +124,7 @@ class Scene:
         self._shapes = [self._shape(i, s) for i, s in enumerate(d["shapes"])]
         self._shapes_json: str | None = None
         self._check_camera()
+        self._check_nesting()
         # Resolve at every default band: unknown material names and tables that miss a
         # band fail here, at load time, rather than mid-render.
         for wl in d["render"]["bands"]:
@@ -282,6 +283,61 @@ class Scene:
                 raise fail("camera.medium", cam["medium"],
                            f"the camera is inside shapes[{i}], whose inside medium is "
                            f"'{b['inside']}'; set camera.medium = '{b['inside']}'")
+
+    def _corners(self, shape: dict) -> np.ndarray:
+        """The 8 world-space corners of a shape's object-space bounding box."""
+        if shape["type"] == "sphere":
+            c, r = np.asarray(shape["center"]), shape["radius"]
+            lo, hi = c - r, c + r
+        elif shape["type"] == "box":
+            lo, hi = np.asarray(shape["min"]), np.asarray(shape["max"])
+        elif shape["type"] == "cylinder":
+            c, a = np.asarray(shape["center"]), np.asarray(shape["axis"])
+            ends = np.array([c, c + shape["height"] * a])
+            # a disc of radius r about unit axis a spans r * sqrt(1 - a_i^2) along axis i
+            ext = shape["radius"] * np.sqrt(np.clip(1 - a * a, 0, 1))
+            lo, hi = ends.min(axis=0) - ext, ends.max(axis=0) + ext
+        else:
+            pos = np.asarray(shape["positions"])
+            lo, hi = pos.min(axis=0), pos.max(axis=0)
+        box = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                        for z in (lo[2], hi[2])])
+        return tf.apply_point(np.asarray(shape["transform"]), box)
+
+    def _volume(self, shape: dict) -> float:
+        m = abs(np.linalg.det(np.asarray(shape["transform"])[:3, :3]))
+        if shape["type"] == "sphere":
+            return m * 4 / 3 * math.pi * shape["radius"] ** 3
+        if shape["type"] == "box":
+            return m * float(np.prod(np.subtract(shape["max"], shape["min"])))
+        return m * math.pi * shape["radius"] ** 2 * shape["height"]
+
+    def _check_nesting(self) -> None:
+        """A dielectric shape lying wholly inside another dielectric sphere, box or cylinder
+        (all convex, so containing the bounding-box corners is containing the shape) must
+        name that container's inside medium as its outside medium (the innermost container
+        when there are several)."""
+        shapes, desc = self._shapes, self.description["shapes"]
+        diel = [i for i, s in enumerate(desc) if s["boundary"]["kind"] == "dielectric"]
+        for i in diel:
+            corners = None
+            containers = []
+            for j in diel:
+                if j == i or shapes[j]["type"] not in ("sphere", "box", "cylinder"):
+                    continue
+                if corners is None:
+                    corners = self._corners(shapes[i])
+                if all(self._contains(shapes[j], c) for c in corners):
+                    containers.append(j)
+            if not containers:
+                continue
+            j = min(containers, key=lambda k: self._volume(shapes[k]))
+            want = desc[j]["boundary"]["inside"]
+            got = desc[i]["boundary"]["outside"]
+            if got != want:
+                raise fail(f"shapes[{i}].outside", got,
+                           f"shapes[{i}] lies inside shapes[{j}], whose inside medium is "
+                           f"'{want}'; set outside = '{want}'")
 
     def _medium_ok(self, pos: np.ndarray, medium: str) -> bool:
         """Whether some dielectric shape containing ``pos`` has ``medium`` inside (nesting)."""
