@@ -215,6 +215,11 @@ fn point_light_over_plane_matches_closed_form_per_pixel() {
 /// A Cornell box [mm]: white floor, ceiling and back wall, red-ish left and green-ish right
 /// walls (one band: reflectances 0.6 and 0.3), a ceiling light, a diffuse box and a sphere.
 fn cornell(res: usize) -> Scene {
+    cornell_with(res, false)
+}
+
+/// The Cornell box; with `glass` the sphere is a clear dielectric of index 1.5.
+fn cornell_with(res: usize, glass: bool) -> Scene {
     let s = 550.0;
     let (x, y, z) = (Vec3::X * s, Vec3::Y * s, Vec3::Z * s);
     let mut shapes = vec![
@@ -244,7 +249,14 @@ fn cornell(res: usize) -> Scene {
                 radius: 100.0,
             }),
             None,
-            Boundary::Opaque { surface: 0 },
+            if glass {
+                Boundary::Dielectric {
+                    inside: 1,
+                    outside: 0,
+                }
+            } else {
+                Boundary::Opaque { surface: 0 }
+            },
         )
         .unwrap(),
     );
@@ -265,9 +277,10 @@ fn cornell(res: usize) -> Scene {
         res,
     )
     .unwrap();
+    let glass_medium = Medium::new("", 0.0, 0.0, 1.5, PhaseFunction::Isotropic).unwrap();
     Scene::new(
         cam,
-        vec![air()],
+        vec![air(), glass_medium],
         vec![
             Surface::Lambertian { reflectance: 0.75 },
             Surface::Lambertian { reflectance: 0.6 },
@@ -300,7 +313,7 @@ fn rel_rms(a: &[f64], b: &[f64]) -> f64 {
 
 /// The photon-mapped Cornell box converges to the path-traced one as photons grow.
 ///
-/// Reference: the path tracer, 4 seeds × 256 spp; its noise σ_ref per 8 × 8-pixel block is the
+/// Reference: the path tracer, 4 seeds × `ref_spp`; its noise σ_ref per 8 × 8-pixel block is the
 /// pooled spread of the 4 runs. `pm` (k = 32) with 10⁴, 10⁵, 10⁶ photons: the block error
 /// (RMS over blocks, relative to the mean block value) must fall at each step; at 10⁴ it must
 /// stand out of the noise (the test can see density-estimation bias), and at 10⁶ it must be
@@ -308,14 +321,25 @@ fn rel_rms(a: &[f64], b: &[f64]) -> f64 {
 /// seeds). The image means must agree within 4 standard errors (energy is not lost or made).
 #[test]
 fn cornell_pm_converges_to_path() {
-    let res = 32;
-    let scene = cornell(res);
-    let render = |s: Settings| blocks(&render_band(&scene, &s, &Control::new()).unwrap().0, res, 8);
+    check_pm_converges_to_path(&cornell(32), 32, 256);
+}
+
+/// The same with the sphere made of clear glass (n = 1.5): camera rays follow Fresnel
+/// reflection/refraction through it, the caustic under it comes from the photon map in `pm`
+/// and from bounce rays reaching the light through the glass in `path`.
+#[test]
+fn cornell_glass_sphere_pm_converges_to_path() {
+    // the caustic makes path tracing noisier: 4× the reference samples
+    check_pm_converges_to_path(&cornell_with(32, true), 32, 1024);
+}
+
+fn check_pm_converges_to_path(scene: &Scene, res: usize, ref_spp: u32) {
+    let render = |s: Settings| blocks(&render_band(scene, &s, &Control::new()).unwrap().0, res, 8);
     let runs: Vec<Vec<f64>> = (1..=4)
         .map(|seed| {
             render(Settings {
                 integrator: Integrator::Path,
-                spp: 256,
+                spp: ref_spp,
                 seed,
                 ..Settings::default()
             })
@@ -447,4 +471,91 @@ fn cancel_stops_promptly() {
     )
     .unwrap();
     assert_eq!(c.done(), 5000 + 400);
+}
+
+/// An index-matched (n = 1) absorbing slab 1 mm thick lying 1 mm above a diffuse plane under a
+/// point light: light and view both cross it, so each pixel sees
+/// L = ρ I cos θ_l / (π r²) · exp(−μa t / cos θ_l) · exp(−μa t / cos θ_c)
+/// (Beer–Lambert along both straight paths; no refraction, no Fresnel at n = 1). Tolerance
+/// per pixel as in the plane test. Checks medium tracking through boundaries, absorption on
+/// camera and shadow rays, and that shadow rays pass index-matched boundaries.
+#[test]
+fn absorbing_index_matched_slab_matches_beer_lambert_per_pixel() {
+    let (rho, intensity, mua, thick) = (0.6, 80.0, 0.7, 1.0);
+    let light = Vec3::new(-1.0, 1.5, 7.0);
+    let absorber = Medium::new("", mua, 0.0, 1.0, PhaseFunction::Isotropic).unwrap();
+    let (w, h) = (16, 12);
+    let cam = Camera::new(Vec3::new(0.5, -6.0, 12.0), Vec3::ZERO, Vec3::Z, 40.0, w, h).unwrap();
+    let slab = ShapeInstance::new(
+        "slab",
+        Geometry::Box(BoxShape {
+            min: Vec3::new(-100.0, -100.0, 1.0),
+            max: Vec3::new(100.0, 100.0, 1.0 + thick),
+        }),
+        None,
+        Boundary::Dielectric {
+            inside: 1,
+            outside: 0,
+        },
+    )
+    .unwrap();
+    let plane = quad(
+        Vec3::new(-90.0, -90.0, 0.0),
+        Vec3::X * 180.0,
+        Vec3::Y * 180.0,
+        0,
+    );
+    let scene = Scene::new(
+        cam,
+        vec![air(), absorber],
+        vec![Surface::Lambertian { reflectance: rho }],
+        vec![plane, slab],
+        vec![Light::Point {
+            position: light,
+            intensity,
+        }],
+        0,
+    )
+    .unwrap();
+    let closed_form = |x: f64, y: f64| {
+        let r = cam.ray(x, y);
+        let p = r.at(-r.o.z / r.d.z);
+        let to = light - p;
+        let cos_l = to.z / to.length();
+        let cos_c = -r.d.z;
+        rho * intensity * cos_l / (PI * to.length_squared())
+            * (-mua * thick / cos_l).exp()
+            * (-mua * thick / cos_c).exp()
+    };
+    for integrator in [Integrator::Path, Integrator::Pm] {
+        let spp = 16;
+        let settings = Settings {
+            integrator,
+            spp,
+            photons: 10_000,
+            ..Settings::default()
+        };
+        let (img, _) = render_band(&scene, &settings, &Control::new()).unwrap();
+        for py in 0..h {
+            for px in 0..w {
+                let g = 12;
+                let vals: Vec<f64> = (0..g * g)
+                    .map(|i| {
+                        let sx = ((i % g) as f64 + 0.5) / g as f64;
+                        let sy = ((i / g) as f64 + 0.5) / g as f64;
+                        closed_form(px as f64 + sx, py as f64 + sy)
+                    })
+                    .collect();
+                let expect = vals.iter().sum::<f64>() / vals.len() as f64;
+                let range = vals.iter().cloned().fold(f64::MIN, f64::max)
+                    - vals.iter().cloned().fold(f64::MAX, f64::min);
+                let tol = 4.0 * range / (2.0 * (spp as f64).sqrt()) + 1e-5 * expect;
+                let got = img[py * w + px] as f64;
+                assert!(
+                    (got - expect).abs() <= tol,
+                    "{integrator:?} pixel ({px}, {py}): {got} vs {expect} ± {tol}"
+                );
+            }
+        }
+    }
 }
