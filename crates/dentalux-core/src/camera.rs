@@ -42,6 +42,12 @@ impl Camera {
                 )));
             }
         }
+        if width * height > 1 << 28 {
+            return Err(Error::InvalidInput(format!(
+                "camera.width × camera.height = {} pixels is too many: allowed ≤ 2^28 per band",
+                width * height
+            )));
+        }
         let f = look_at - position;
         if !f.is_finite() || f.length() == 0.0 {
             return Err(Error::InvalidInput(
@@ -96,5 +102,6 @@ mod tests {
         assert!((r.d - Vec3::new(2.0, 0.0, -1.0).normalize()).length() < 1e-12);
         assert!(Camera::new(Vec3::ZERO, Vec3::Y, Vec3::Y, 40.0, 4, 4).is_err());
         assert!(Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 0.0, 4, 4).is_err());
+        assert!(Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0, 65536, 65536).is_err());
     }
 }
