@@ -55,22 +55,28 @@ pub fn direction_about(axis: Vec3, cos_theta: f64, phi: f64) -> Vec3 {
 /// taken as √(dx² + dy²), not √(1 − dz²), which loses digits near the poles.
 #[inline]
 pub fn rotate_direction(d: Vec3, cos_theta: f64, cos_phi: f64, sin_phi: f64) -> Vec3 {
+    rotate_direction_scaled(d, cos_theta, cos_phi, sin_phi, 1.0)
+}
+
+/// [`rotate_direction`] with the azimuth given as (ρ cos φ, ρ sin φ, ρ) for any ρ > 0, as
+/// [`crate::sampling::sample_azimuth_scaled`] returns it: the normalisation by ρ is folded
+/// into the one division the rotation needs anyway.
+#[inline]
+pub fn rotate_direction_scaled(d: Vec3, cos_theta: f64, c: f64, s: f64, rho: f64) -> Vec3 {
     let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
     let (ux, uy, uz) = (d.x, d.y, d.z);
     let tmp2 = ux * ux + uy * uy;
     if tmp2 < 1e-20 {
-        return Vec3::new(
-            sin_theta * cos_phi,
-            sin_theta * sin_phi,
-            cos_theta * uz.signum(),
-        );
+        let k = sin_theta / rho;
+        return Vec3::new(k * c, k * s, cos_theta * uz.signum());
     }
     let tmp = tmp2.sqrt();
-    let st_t = sin_theta / tmp;
+    // sinθ / (ρ sinΘ_d): one division for the azimuth and the frame
+    let st_t = sin_theta / (tmp * rho);
     Vec3::new(
-        st_t * (ux * uz * cos_phi - uy * sin_phi) + ux * cos_theta,
-        st_t * (uy * uz * cos_phi + ux * sin_phi) + uy * cos_theta,
-        -sin_theta * cos_phi * tmp + uz * cos_theta,
+        st_t * (ux * uz * c - uy * s) + ux * cos_theta,
+        st_t * (uy * uz * c + ux * s) + uy * cos_theta,
+        -st_t * c * tmp2 + uz * cos_theta,
     )
 }
 
@@ -111,6 +117,8 @@ mod tests {
             let w = rotate_direction(d, -0.25, c, s);
             assert!((w.length() - 1.0).abs() < 1e-9, "{d:?}");
             assert!((w.dot(d) + 0.25).abs() < 1e-9, "{d:?}");
+            let v = rotate_direction_scaled(d, -0.25, 3.0 * c, 3.0 * s, 3.0);
+            assert!((v - w).length() < 1e-14, "{d:?}");
         }
     }
 

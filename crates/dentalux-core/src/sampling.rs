@@ -36,20 +36,28 @@ pub fn uniform_disc(u: [f64; 2]) -> (f64, f64) {
     (r * c, r * s)
 }
 
-/// Uniform azimuth φ in [0, 2π), returned as (cos φ, sin φ) without trigonometric calls:
-/// a point (x, y) uniform in the unit disc (by rejection from the square, acceptance π/4)
-/// has a uniform polar angle α, and (cos 2α, sin 2α) = ((x² − y²)/r², 2xy/r²).
-/// `next` yields uniforms in [0, 1); it is called an even number of times (2.55 on average).
+/// Uniform azimuth φ in [0, 2π), returned as (cos φ, sin φ) without trigonometric calls;
+/// see [`sample_azimuth_scaled`]. `next` yields uniforms in [0, 1).
 #[inline]
-pub fn sample_azimuth(mut next: impl FnMut() -> f64) -> (f64, f64) {
+pub fn sample_azimuth(next: impl FnMut() -> f64) -> (f64, f64) {
+    let (c, s, rho) = sample_azimuth_scaled(next);
+    (c / rho, s / rho)
+}
+
+/// Uniform azimuth as (ρ cos φ, ρ sin φ, ρ) with ρ in (0, 1]: a point (x, y) uniform in the
+/// unit disc (by rejection from the square, acceptance π/4) has a uniform polar angle α, and
+/// (x² − y², 2xy) = r² (cos 2α, sin 2α). Leaving out the division by ρ = r² lets the caller
+/// fold it into its own (see [`crate::math::rotate_direction_scaled`]). `next` yields
+/// uniforms in [0, 1); it is called an even number of times (2.55 on average).
+#[inline]
+pub fn sample_azimuth_scaled(mut next: impl FnMut() -> f64) -> (f64, f64, f64) {
     loop {
         let x = 2.0 * next() - 1.0;
         let y = 2.0 * next() - 1.0;
         let r2 = x * x + y * y;
         // r2 = 0 has no angle; r2 > 1 lies outside the disc
         if r2 <= 1.0 && r2 > 0.0 {
-            let inv = 1.0 / r2;
-            return ((x * x - y * y) * inv, 2.0 * x * y * inv);
+            return (x * x - y * y, 2.0 * x * y, r2);
         }
     }
 }

@@ -23,23 +23,36 @@
 //! standard errors by only 5% but cost 3.7× the time per photon, since every photon then
 //! walks back to the surfaces until its weight is spent.
 //!
-//! Hot-loop choices (measured with callgrind): per-layer constants (1/σt, albedo, depths)
-//! are computed once per run, the azimuth comes from a rejection-sampled disc point instead
-//! of sin/cos, and a single-lobe phase function draws one uniform per scattering.
+//! Hot-loop choices (measured with callgrind): per-layer constants (1/σt, albedo, depths,
+//! the constants of eq. 9) are computed once per run, the azimuth comes from a rejection-
+//! sampled disc point instead of sin/cos (its normalisation folded into the rotation's
+//! division), and a single-lobe phase function draws one uniform per scattering.
 
 use crate::control::Control;
 use crate::error::{check_range, Error, Result};
 use crate::fresnel::reflectance_and_cos_t;
-use crate::math::{rotate_direction, Vec3};
+use crate::math::{rotate_direction_scaled, Vec3};
 use crate::medium::Medium;
+use crate::phase::PhaseFunction;
 use crate::rng::Stream;
-use crate::sampling::{cosine_hemisphere, sample_azimuth};
+use crate::sampling::{cosine_hemisphere, sample_azimuth_scaled};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
-/// Photons per batch: each batch has its own random stream keyed by (seed, band, batch),
-/// so the numbers do not depend on how batches are spread over threads.
+/// Most photons per batch: each batch has its own random stream keyed by (seed, band,
+/// batch), so the numbers do not depend on how batches are spread over threads.
 pub const BATCH: u64 = 8192;
+/// Fewest photons per batch (below this, per-batch set-up would show).
+const MIN_BATCH: u64 = 256;
+/// Batches a run is cut into when it has enough photons, so that slow cases (e.g. 100 000
+/// photons of a thick dentin slab) still keep many threads busy to the end.
+const TARGET_BATCHES: u64 = 64;
+
+/// Photons per batch for a run of `n_photons`: a function of `n_photons` only, never of
+/// the thread count, so a seed gives the same numbers on any machine.
+pub fn batch_size(n_photons: u64) -> u64 {
+    (n_photons / TARGET_BATCHES).clamp(MIN_BATCH, BATCH)
+}
 /// Below this weight the weighted estimator switches to the energy-exact roulette.
 const WEIGHT_THRESHOLD: f64 = 1e-4;
 /// A photon with more interactions than this means an input Monte Carlo cannot finish.
@@ -245,17 +258,19 @@ impl Tally {
     }
 }
 
-/// Run the slab simulation. Batches run in parallel on the current rayon pool and are
-/// reduced in batch order, so a seed gives the same numbers for any thread count.
+/// Run the slab simulation. Batches (see [`batch_size`]) run in parallel on the current
+/// rayon pool and are reduced in batch order, so a seed gives the same numbers for any
+/// thread count.
 pub fn simulate(cfg: &SlabConfig, control: &Control) -> Result<SlabResult> {
     cfg.validate()?;
-    let n_batches = cfg.n_photons.div_ceil(BATCH);
+    let batch = batch_size(cfg.n_photons);
+    let n_batches = cfg.n_photons.div_ceil(batch);
     let tracer = Tracer::new(cfg);
     let tallies: Vec<Result<Tally>> = (0..n_batches)
         .into_par_iter()
         .map(|b| {
             control.check()?;
-            let count = BATCH.min(cfg.n_photons - b * BATCH);
+            let count = batch.min(cfg.n_photons - b * batch);
             let mut rng = Stream::new(cfg.seed, cfg.band, b);
             let mut tally = Tally::new(cfg);
             let mut photon = [0.0; 7];
@@ -294,6 +309,41 @@ struct LayerConst {
     z_bot: f64,
     /// Whether the phase function needs a second uniform (lobe choice).
     two_uniforms: bool,
+    /// Eq. 9 with its constants precomputed, for a plain HG phase function with |g| ≥ 1e-3
+    /// (others go through [`PhaseFunction::sample_cos`]).
+    hg: Option<HgSampler>,
+}
+
+/// Eq. 9, cos θ = (1 + g² − ((1 − g²)/(1 − g + 2gξ))²)/(2g), with the constants of one g.
+#[derive(Clone, Copy)]
+struct HgSampler {
+    one_plus_g2: f64,
+    one_minus_g2: f64,
+    one_minus_g: f64,
+    two_g: f64,
+    inv_two_g: f64,
+}
+
+impl HgSampler {
+    fn new(phase: &PhaseFunction) -> Option<Self> {
+        match *phase {
+            // small |g| is left to the phase function, which switches to isotropic sampling
+            PhaseFunction::HenyeyGreenstein { g } if g.abs() >= 1e-3 => Some(Self {
+                one_plus_g2: 1.0 + g * g,
+                one_minus_g2: 1.0 - g * g,
+                one_minus_g: 1.0 - g,
+                two_g: 2.0 * g,
+                inv_two_g: 0.5 / g,
+            }),
+            _ => None,
+        }
+    }
+
+    #[inline]
+    fn sample_cos(&self, xi: f64) -> f64 {
+        let frac = self.one_minus_g2 / (self.one_minus_g + self.two_g * xi);
+        ((self.one_plus_g2 - frac * frac) * self.inv_two_g).clamp(-1.0, 1.0)
+    }
 }
 
 /// Precomputed geometry of the stack plus the photon walk.
@@ -323,6 +373,7 @@ impl<'a> Tracer<'a> {
                     z_top: z,
                     z_bot: z + l.thickness,
                     two_uniforms: l.medium.phase.uses_second_uniform(),
+                    hg: HgSampler::new(&l.medium.phase),
                 };
                 z += l.thickness;
                 c
@@ -455,10 +506,15 @@ impl<'a> Tracer<'a> {
                 // new direction from the phase function (eqs. 7–10); the second uniform
                 // is drawn only for mixtures, the azimuth without trigonometry
                 let u0 = rng.uniform();
-                let u1 = if lc.two_uniforms { rng.uniform() } else { 0.0 };
-                let cos_theta = cfg.layers[li].medium.phase.sample_cos([u0, u1]);
-                let (cp, sp) = sample_azimuth(|| rng.uniform());
-                d = rotate_direction(d, cos_theta, cp, sp);
+                let cos_theta = match &lc.hg {
+                    Some(hg) => hg.sample_cos(u0),
+                    None => {
+                        let u1 = if lc.two_uniforms { rng.uniform() } else { 0.0 };
+                        cfg.layers[li].medium.phase.sample_cos([u0, u1])
+                    }
+                };
+                let (c, s, rho) = sample_azimuth_scaled(|| rng.uniform());
+                d = rotate_direction_scaled(d, cos_theta, c, s, rho);
                 scattered = true;
                 continue;
             }
@@ -526,7 +582,6 @@ impl<'a> Tracer<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::phase::PhaseFunction;
 
     pub(crate) fn one_layer(
         mua: f64,
@@ -578,7 +633,8 @@ mod tests {
 
     #[test]
     fn same_seed_same_numbers_for_any_thread_count() {
-        let cfg = one_layer(0.5, 20.0, 0.9, 1.5, 1.0, 3 * BATCH + 17);
+        // several full batches and a partial one
+        let cfg = one_layer(0.5, 20.0, 0.9, 1.5, 1.0, 67 * batch_size(20_000) + 17);
         let pool1 = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
