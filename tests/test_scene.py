@@ -635,11 +635,22 @@ def test_render_without_core_is_a_clear_error(monkeypatch):
         dentalux.render(cornell_box(resolution=(2, 2)), bands=[540])
 
 
-def test_dict_input_is_not_modified():
-    d = cornell_box()
-    before = copy.deepcopy(d)
-    scene_from_dict(d).resolve(540)
-    assert d == before
+def test_dict_input_is_not_modified(tmp_path):
+    for d in (cornell_box(), discs(), every_type(tmp_path), base()):
+        before = copy.deepcopy(d)
+        s = scene_from_dict(d, base_dir=tmp_path)
+        s.resolve(540)
+        assert d == before
+        # and the scene does not share mutable parts with the input
+        json.loads(s.to_json(540))
+        for shape in d["shapes"]:
+            for v in shape.values():
+                if isinstance(v, list):
+                    v.append("x")
+        d["lights"][0]["type"] = "nonsense"
+        assert json.loads(s.to_json(540)) == json.loads(scene_from_dict(before,
+                                                                         base_dir=tmp_path)
+                                                        .to_json(540))
 
 
 # ---------------------------------------------------------------------------------------
@@ -798,3 +809,26 @@ def test_nested_media_must_be_declared_consistently():
     # Moved so that it pokes out of the sphere: not contained, no constraint.
     d["shapes"][1].update(center=[0, 0, 7], outside="air")
     scene_from_dict(d)
+
+
+def test_inline_mesh_from_numpy_arrays():
+    """The dict API takes numpy arrays; a bad entry is still named precisely."""
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    tri = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    d = base()
+    d["shapes"].append({"type": "mesh", "positions": pos, "triangles": tri,
+                        "inside": "enamel", "transform": {"translate": [0, 10, 0]}})
+    s = scene_from_dict(d)
+    mesh = s.resolve(540)["shapes"][4]
+    assert mesh["positions"] == pos.tolist() and mesh["triangles"] == tri.tolist()
+    check_contract(json.loads(s.to_json(540)))
+    assert len(s.hash) == 64
+    d["shapes"][4]["positions"] = [[0, 0, 0], [1, 0, 0], [0, "1", 0], [0, 0, 1]]
+    with pytest.raises(SceneError, match=r"shapes\[4\]\.positions\[2\]\[1\] = '1': must be a "
+                                         r"number"):
+        scene_from_dict(d)
+    d["shapes"][4]["positions"] = pos
+    d["shapes"][4]["triangles"] = tri.astype(float)
+    with pytest.raises(SceneError, match=r"shapes\[4\]\.triangles\[0\]\[0\] = 0\.0: must be an "
+                                         r"integer"):
+        scene_from_dict(d)

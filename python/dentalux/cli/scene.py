@@ -11,6 +11,7 @@ from rich.table import Table
 
 from dentalux.cli.render import parse_bands
 from dentalux.scene.load import load_scene
+from dentalux.scene.resolve import to_plain
 
 scene_app = typer.Typer(no_args_is_help=True, help="Scene files: validation and inspection.")
 
@@ -31,7 +32,7 @@ def check_command(
             "summary": summary,
             "scene": scene.description,
             "resolved": {f"{wl:g}": scene.resolve(wl) for wl in band_list},
-        }, indent=1))
+        }, indent=1, default=to_plain))
         return
     if as_json:
         print(json.dumps(summary))

@@ -14,7 +14,6 @@ it is 1.0 at 560 nm; ``"flat"`` is 1.0 everywhere; a table is used as given. A l
 
 from __future__ import annotations
 
-import copy
 import hashlib
 import json
 import math
@@ -100,6 +99,22 @@ def _file_digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
+def _array_digest(x):
+    """JSON stand-in for a numpy array inside the description: dtype, shape and a digest."""
+    if isinstance(x, np.ndarray):
+        a = np.ascontiguousarray(x)
+        return {"dtype": a.dtype.str, "shape": list(a.shape),
+                "sha256": hashlib.sha256(a.tobytes()).hexdigest()}
+    raise TypeError(f"not serialisable: {type(x).__name__}")
+
+
+def to_plain(x):
+    """JSON ``default=`` hook that writes numpy arrays as nested lists."""
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    raise TypeError(f"not serialisable: {type(x).__name__}")
+
+
 def _identity_or(m: np.ndarray) -> list[list[float]]:
     return [[float(x) for x in row] for row in m]
 
@@ -113,13 +128,15 @@ class Scene:
 
     def __init__(self, description: dict, base_dir: str | Path | None = None,
                  source: str | None = None):
-        self.description = validate(copy.deepcopy(description))
+        # validate() builds new containers and never mutates its input (tested), so no copy
+        self.description = validate(description)
         self.base_dir = Path(base_dir) if base_dir is not None else Path.cwd()
         self.source = source
         d = self.description
         self.media_names = list(d["media"])
         self.surface_names = list(d["surfaces"])
         self._files: dict[str, str] = {}
+        self._hash: str | None = None
         self._images = self._load_images()
         self._shapes = [self._shape(i, s) for i, s in enumerate(d["shapes"])]
         self._shapes_json: str | None = None
@@ -162,9 +179,11 @@ class Scene:
     @property
     def hash(self) -> str:
         """SHA-256 of the normalised description and the bytes of every file it reads."""
-        blob = json.dumps({"description": self.description, "files": self._files},
-                          sort_keys=True, separators=(",", ":"))
-        return hashlib.sha256(blob.encode()).hexdigest()
+        if self._hash is None:
+            blob = json.dumps({"description": self.description, "files": self._files},
+                              sort_keys=True, separators=(",", ":"), default=_array_digest)
+            self._hash = hashlib.sha256(blob.encode()).hexdigest()
+        return self._hash
 
     def summary(self) -> dict:
         """Counts and names, for ``dentalux scene check``."""
@@ -242,9 +261,7 @@ class Scene:
                 data = load_mesh(f, f"{path}.file", s["file"])
                 self._files[f"{path}.file"] = _file_digest(f)
             else:
-                uvs = np.asarray(s["uvs"], dtype=float) if s["uvs"] is not None else None
-                data = MeshData(np.asarray(s["positions"], dtype=float),
-                                np.asarray(s["triangles"], dtype=np.int64), uvs)
+                data = MeshData(s["positions"], s["triangles"], s["uvs"])
             if s["boundary"]["kind"] == "dielectric":
                 data = check_closed(data, path)
             out.update(positions=data.positions.tolist(), triangles=data.triangles.tolist(),

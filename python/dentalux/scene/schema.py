@@ -490,27 +490,48 @@ def validate_shape(i: int, s: Any) -> dict:
         else:
             if d["triangles"] is None:
                 raise SceneError(f"{path}.triangles: missing (required with positions)")
-            d["positions"] = [vec(p, f"{path}.positions[{j}]")
-                              for j, p in enumerate(_seq(d["positions"], f"{path}.positions"))]
-            nv = len(d["positions"])
-            tris = []
-            for j, t in enumerate(_seq(d["triangles"], f"{path}.triangles")):
-                if isinstance(t, (str, dict)) or not hasattr(t, "__len__") or len(t) != 3:
-                    raise fail(f"{path}.triangles[{j}]", t, "must be 3 vertex indices")
-                idx = [integer(t[a], f"{path}.triangles[{j}][{a}]", lo=0) for a in range(3)]
-                if max(idx) >= nv:
-                    raise fail(f"{path}.triangles[{j}]", t,
-                               f"vertex index out of range (there are {nv} positions)")
-                tris.append(idx)
-            d["triangles"] = tris
+            # Fast path: a clean numeric table (lists or numpy arrays) is checked with
+            # numpy; anything else goes through the per-entry checks for a precise message.
+            pos = _table_array(d["positions"], "iuf", 3)
+            if pos is None or not np.all(np.isfinite(pos)):
+                pos = np.array([vec(p, f"{path}.positions[{j}]") for j, p in
+                                enumerate(_seq(d["positions"], f"{path}.positions"))])
+            d["positions"] = pos.astype(float)
+            nv = len(pos)
+            tri = _table_array(d["triangles"], "iu", 3)
+            if tri is None or tri.min() < 0 or tri.max() >= nv:
+                for j, t in enumerate(_seq(d["triangles"], f"{path}.triangles")):
+                    if isinstance(t, (str, dict)) or not hasattr(t, "__len__") or len(t) != 3:
+                        raise fail(f"{path}.triangles[{j}]", t, "must be 3 vertex indices")
+                    idx = [integer(t[a], f"{path}.triangles[{j}][{a}]", lo=0)
+                           for a in range(3)]
+                    if max(idx) >= nv:
+                        raise fail(f"{path}.triangles[{j}]", list(t),
+                                   f"vertex index out of range (there are {nv} positions)")
+                tri = np.asarray(d["triangles"])
+            d["triangles"] = tri.astype(np.int64)
             if d["uvs"] is not None:
-                uvs = _seq(d["uvs"], f"{path}.uvs")
+                uvs = _table_array(d["uvs"], "iuf", 2)
+                if uvs is None or not np.all(np.isfinite(uvs)):
+                    uvs = np.array([vec(p, f"{path}.uvs[{j}]", n=2, unit="") for j, p in
+                                    enumerate(_seq(d["uvs"], f"{path}.uvs"))])
                 if len(uvs) != nv:
-                    raise fail(f"{path}.uvs", d["uvs"], f"must have {nv} entries (one per "
-                                                        "position)")
-                d["uvs"] = [vec(p, f"{path}.uvs[{j}]", n=2, unit="") for j, p in
-                            enumerate(uvs)]
+                    raise fail(f"{path}.uvs", f"<{len(uvs)} entries>",
+                               f"must have {nv} entries (one per position)")
+                d["uvs"] = uvs.astype(float)
     return d
+
+
+def _table_array(value: Any, kinds: str, cols: int) -> np.ndarray | None:
+    """``value`` as an (n, cols) array when it is a non-empty numeric table whose dtype kind
+    is in ``kinds`` (no strings, no booleans), else None."""
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError):
+        return None
+    if raw.ndim != 2 or raw.shape[1] != cols or raw.shape[0] == 0 or raw.dtype.kind not in kinds:
+        return None
+    return raw
 
 
 def _seq(value: Any, path: str) -> list:
