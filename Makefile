@@ -50,6 +50,7 @@ validate: build-prod
 
 bench: build-prod
 	$(VENV)/bin/python benchmarks/slab.py
+	$(VENV)/bin/python benchmarks/inverse.py
 
 clean:
 	cargo clean
