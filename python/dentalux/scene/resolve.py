@@ -140,12 +140,13 @@ class Scene:
         self._images = self._load_images()
         self._shapes = [self._shape(i, s) for i, s in enumerate(d["shapes"])]
         self._shapes_json: str | None = None
+        self._shapes_plain: list | None = None
         self._check_camera()
         self._check_nesting()
         # Resolve at every default band: unknown material names and tables that miss a
         # band fail here, at load time, rather than mid-render.
         for wl in d["render"]["bands"]:
-            self.resolve(wl)
+            self._band(wl)
 
     # -- properties -----------------------------------------------------------------
 
@@ -264,8 +265,8 @@ class Scene:
                 data = MeshData(s["positions"], s["triangles"], s["uvs"])
             if s["boundary"]["kind"] == "dielectric":
                 data = check_closed(data, path)
-            out.update(positions=data.positions.tolist(), triangles=data.triangles.tolist(),
-                       uvs=None if data.uvs is None else data.uvs.tolist())
+            # numpy arrays until serialised (see _plain_shapes and to_json)
+            out.update(positions=data.positions, triangles=data.triangles, uvs=data.uvs)
         out["boundary"] = self._boundary(s["boundary"])
         if s["type"] != "quad":
             out["transform"] = _identity_or(m)
@@ -430,8 +431,8 @@ class Scene:
                 "intensity": s["intensity"] * rel, "cone_deg": s["cone_deg"],
                 "falloff_deg": s["falloff_deg"]}
 
-    def resolve(self, wavelength_nm: float, resolution: tuple[int, int] | None = None) -> dict:
-        """The render-contract scene dict for one band [nm]."""
+    def _band(self, wavelength_nm: float, resolution: tuple[int, int] | None = None) -> dict:
+        """Everything of the contract scene for one band [nm] except the shapes."""
         wl = float(wavelength_nm)
         cam = self.description["camera"]
         w, h = resolution if resolution is not None else self.resolution
@@ -441,16 +442,27 @@ class Scene:
             "ambient_medium": self.media_names.index(cam["medium"]),
             "media": [self.medium_at(n, wl) for n in self.media_names],
             "surfaces": [self._surface_at(n, wl) for n in self.surface_names],
-            "shapes": self._shapes,
             "lights": [self._light_at(i, wl) for i in range(len(self.description["lights"]))],
         }
+
+    def _plain_shapes(self) -> list[dict]:
+        """The shapes with mesh arrays as nested lists (built once)."""
+        if self._shapes_plain is None:
+            self._shapes_plain = [
+                {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in s.items()}
+                for s in self._shapes
+            ]
+        return self._shapes_plain
+
+    def resolve(self, wavelength_nm: float, resolution: tuple[int, int] | None = None) -> dict:
+        """The render-contract scene dict for one band [nm] (plain lists, JSON-ready)."""
+        return {**self._band(wavelength_nm, resolution), "shapes": self._plain_shapes()}
 
     def to_json(self, wavelength_nm: float, resolution: tuple[int, int] | None = None) -> str:
         """:meth:`resolve` as the JSON string ``render_band`` takes. The shapes (band
         independent, and large for meshes) are serialised once and reused for every band."""
-        d = self.resolve(wavelength_nm, resolution)
-        del d["shapes"]
         if self._shapes_json is None:
-            self._shapes_json = json.dumps(self._shapes, separators=(",", ":"))
-        head = json.dumps(d, separators=(",", ":"))
+            self._shapes_json = json.dumps(self._shapes, separators=(",", ":"),
+                                           default=to_plain)
+        head = json.dumps(self._band(wavelength_nm, resolution), separators=(",", ":"))
         return head[:-1] + ',"shapes":' + self._shapes_json + "}"

@@ -653,7 +653,9 @@ def validate(raw: Any) -> dict:
     shapes = raw["shapes"]
     if isinstance(shapes, (str, dict)) or not hasattr(shapes, "__len__"):
         raise fail("shapes", shapes, "must be a list of tables ([[shapes]])")
-    out["shapes"] = [validate_shape(i, s) for i, s in enumerate(shapes)]
+    from dentalux.scene.tooth import expand_shape  # a tooth entry gives two meshes
+
+    out["shapes"] = [m for i, s in enumerate(shapes) for m in expand_shape(i, s)]
 
     lights = raw["lights"]
     if isinstance(lights, (str, dict)) or not hasattr(lights, "__len__"):
