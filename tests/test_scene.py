@@ -832,3 +832,35 @@ def test_inline_mesh_from_numpy_arrays():
     with pytest.raises(SceneError, match=r"shapes\[4\]\.triangles\[0\]\[0\] = 0\.0: must be an "
                                          r"integer"):
         scene_from_dict(d)
+
+
+def test_camera_inside_a_closed_mesh(tmp_path):
+    """Parity ray test: inside the (scaled, moved) cube mesh is refused when it is opaque;
+    an open mesh has no inside."""
+    (tmp_path / "cube.obj").write_text(CUBE_OBJ)
+    d = base()
+    d["shapes"].append({"type": "mesh", "file": "cube.obj", "surface": "white",
+                        "transform": {"scale": 4.0, "translate": [-2, -32, 8]}})
+    d["camera"]["position"] = [0.5, -29.5, 10.5]  # in [-2, 2] x [-32, -28] x [8, 12]
+    with pytest.raises(SceneError, match=r"camera\.position = .*inside the opaque shapes\[4\] "
+                                         r"\(mesh\)"):
+        scene_from_dict(d, base_dir=tmp_path)
+    d["camera"]["position"] = [0.5, -33, 10.5]  # just outside
+    scene_from_dict(d, base_dir=tmp_path)
+    d["camera"]["position"] = [0.5, -29.5, 10.5]
+    (tmp_path / "open.obj").write_text("\n".join(CUBE_OBJ.splitlines()[:-2]) + "\n")
+    d["shapes"][4]["file"] = "open.obj"
+    scene_from_dict(d, base_dir=tmp_path)
+
+
+def test_point_inside_mesh_matches_the_sphere_it_approximates(np_rng):
+    import trimesh
+    from dentalux.scene.meshes import MeshData, point_inside
+
+    ico = trimesh.creation.icosphere(subdivisions=3, radius=10.0)
+    data = MeshData(np.asarray(ico.vertices), np.asarray(ico.faces))
+    pts = np_rng.uniform(-15, 15, size=(300, 3))
+    r = np.linalg.norm(pts, axis=1)
+    keep = np.abs(r - 10.0) > 0.5  # the mesh deviates from the sphere by < 0.1 mm
+    got = np.array([point_inside(data, p) for p in pts[keep]])
+    assert np.array_equal(got, r[keep] < 10.0)

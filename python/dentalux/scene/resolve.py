@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from dentalux.scene import transform as tf
-from dentalux.scene.meshes import MeshData, check_closed, load_mesh
+from dentalux.scene.meshes import MeshData, check_closed, is_closed, load_mesh, point_inside
 from dentalux.scene.schema import (
     MEDIUM_FALLBACK,
     SceneError,
@@ -272,11 +272,15 @@ class Scene:
             out["transform"] = _identity_or(m)
         return out
 
-    def _contains(self, shape: dict, point: np.ndarray) -> bool:
-        """Whether ``point`` lies strictly inside a sphere, box or cylinder (meshes: no)."""
-        if shape["type"] not in ("sphere", "box", "cylinder"):
+    def _contains(self, shape: dict, point: np.ndarray, meshes: bool = False) -> bool:
+        """Whether ``point`` lies strictly inside a sphere, box or cylinder, or with
+        ``meshes`` a closed mesh (open meshes have no inside)."""
+        if shape["type"] == "quad" or (shape["type"] == "mesh" and not meshes):
             return False
         p = tf.apply_point(np.linalg.inv(np.asarray(shape["transform"])), point)
+        if shape["type"] == "mesh":
+            data = MeshData(shape["positions"], shape["triangles"])
+            return point_inside(data, p) and is_closed(data)
         if shape["type"] == "sphere":
             return bool(np.linalg.norm(p - shape["center"]) < shape["radius"])
         if shape["type"] == "box":
@@ -290,7 +294,7 @@ class Scene:
         cam = self.description["camera"]
         pos = np.asarray(cam["position"], dtype=float)
         for i, shape in enumerate(self._shapes):
-            if not self._contains(shape, pos):
+            if not self._contains(shape, pos, meshes=True):
                 continue
             b = self.description["shapes"][i]["boundary"]
             if b["kind"] == "opaque":
@@ -361,7 +365,8 @@ class Scene:
         """Whether some dielectric shape containing ``pos`` has ``medium`` inside (nesting)."""
         for i, shape in enumerate(self._shapes):
             b = self.description["shapes"][i]["boundary"]
-            if b["kind"] == "dielectric" and b["inside"] == medium and self._contains(shape, pos):
+            if b["kind"] == "dielectric" and b["inside"] == medium \
+                    and self._contains(shape, pos, meshes=True):
                 return True
         return False
 
