@@ -75,10 +75,22 @@ fn render<F: Fn(&Ray, &mut Stream) -> f64 + Sync>(
 }
 
 fn vpm_image(scene: &Scene, photons: u64, mode: StoreMode, spp: usize, seed: u64) -> Vec<f64> {
+    vpm_image_clip(scene, photons, mode, spp, seed, false)
+}
+
+fn vpm_image_clip(
+    scene: &Scene,
+    photons: u64,
+    mode: StoreMode,
+    spp: usize,
+    seed: u64,
+    clip_boundary: bool,
+) -> Vec<f64> {
     let control = Control::new();
     let maps = trace_photons(scene, photons, mode, seed, 0, &control).unwrap();
     let params = VpmParams {
         mode,
+        clip_boundary,
         ..VpmParams::default()
     };
     let vpm = Vpm::new(scene, &maps, params);
@@ -503,4 +515,24 @@ fn ppm_converges_to_volpath_on_disc() {
     assert!(rmse(&many, &reference) < rmse(&few, &reference));
     assert!(e.abs() < 4.0 * se + 0.04, "relative error {e}");
     assert_eq!(run(2), few, "ppm must be deterministic");
+}
+
+/// Experiment: boundary clipping on and off, disc over a black floor (volume light only).
+#[test]
+#[ignore]
+fn clip_experiment() {
+    let mut scene = disc_scene(1.0, 20, 15);
+    scene.surfaces[0] = Surface::Black;
+    let (reference, var) = render(&scene, 8192, 61, |r, rng| volpath::radiance(&scene, r, rng));
+    for photons in [400_000u64, 3_200_000] {
+        for clip in [false, true] {
+            let img = vpm_image_clip(&scene, photons, StoreMode::All, 64, 63, clip);
+            compare(
+                &format!("black floor {photons} clip {clip}"),
+                &img,
+                &reference,
+                &var,
+            );
+        }
+    }
 }

@@ -97,6 +97,7 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
             step: settings.step,
             mode,
             max_depth: settings.max_depth,
+            ..VpmParams::default()
         };
         let mut vpm = Vpm::new(scene, &maps, params);
         let (vol_r1, surf_r1) = r1.get_or_insert_with(|| {
