@@ -749,7 +749,7 @@ def test_cli_render_hands_equal_energy_radiance_to_colour(fake_core, tmp_path, m
     """write_images applies the illuminant itself, so D65-lit radiance is divided by the
     D65 relative spectrum (CIE: 1.17008 at 450 nm, 1 at 560 nm) and white = the light's
     radiance scale (15 in cornell.toml)."""
-    from dentalux.cli import render as render_cli
+    from dentalux import color
 
     seen = {}
 
@@ -759,7 +759,7 @@ def test_cli_render_hands_equal_energy_radiance_to_colour(fake_core, tmp_path, m
                     illuminant=illuminant, white=white)
         return {"illuminant": illuminant}
 
-    monkeypatch.setattr(render_cli, "_write_images", lambda: fake_write_images)
+    monkeypatch.setattr(color, "write_images", fake_write_images)
     with pytest.raises(SystemExit) as exc:
         main(["render", str(CORNELL), "--out", str(tmp_path), "--bands", "450,560",
               "--resolution", "2x2", "--json"])

@@ -51,13 +51,15 @@ class Quality:
     tooth_resolution_mm: float
     crop_resolution: tuple[int, int]
     volpath_spp: int
+    k: int
 
 
 QUALITIES = {
     # a few minutes for everything on a 2-core machine (what `make demo` runs)
-    "preview": Quality("preview", (240, 180), 2, 50_000, 200_000, 0.35, (96, 72), 64),
+    "preview": Quality("preview", (240, 180), 2, 50_000, 1_000_000, 0.35, (96, 72), 64, 200),
     # the paper's photon counts: 100 M volume photons, 1 M global photons
-    "paper": Quality("paper", (512, 384), 16, 1_000_000, 100_000_000, 0.15, (192, 144), 1024),
+    "paper": Quality("paper", (512, 384), 16, 1_000_000, 100_000_000, 0.15, (192, 144), 1024,
+                     200),
 }
 
 
@@ -119,12 +121,13 @@ def _render_figure(name: str, scene: dict, out: Path, quality: Quality, integrat
     sc = scene_from_dict(scene)
     t0 = time.perf_counter()
     settings = dict(spp=quality.spp, photons=quality.photons,
-                    volume_photons=quality.volume_photons)
+                    volume_photons=quality.volume_photons, k=quality.k)
     settings.update(overrides)
     if integrator in ("volpath", "path"):
-        settings.pop("volume_photons")
-        settings.pop("photons")
-    result = render(sc, integrator=integrator, bands=bands, seed=1, **settings)
+        for key in ("volume_photons", "photons", "k"):
+            settings.pop(key)
+    result = render(sc, integrator=integrator, bands=bands, seed=1, correlated_bands=True,
+                    **settings)
     folder = out / name
     summary = write_render_outputs(sc, result, folder, regions=regions)
     summary.update({"figure": name, "quality": asdict(quality), **(extra or {})})
