@@ -348,3 +348,13 @@ def test_shipped_biomaterial_toml_matches_a_fresh_fit():
         assert lo <= r.mua <= hi
         lo, hi = mat["mus_ci"][i]
         assert lo <= r.mus <= hi
+
+
+def test_data_below_the_clear_slab_line_is_refused_with_that_bound():
+    # A thin, barely scattering disc: TR just below the non-scattering slab's TR at this TT.
+    from dentalux.inverse.bounds import clear_slab_tr
+
+    tt, n = 0.5692, 1.63
+    tr = clear_slab_tr(tt, n, 1.0, False) - 0.0015
+    with pytest.raises(ValueError, match=r"TR >= TR_clear\(TT\)"):
+        fit(tt=tt, tr=tr, n=n, g=0.96, thickness=0.2, model="telegrapher")

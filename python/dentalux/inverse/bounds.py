@@ -9,6 +9,11 @@ For a slab of index n in surroundings n_out lit by a normal collimated beam:
   limit with multiple reflections between the faces): scattering and absorption only lower it.
 
 Each violation raises ValueError naming the bound and the numbers.
+
+A further, model-level bound is used to explain a failed fit (:func:`clear_slab_tr`): for a
+given TT, a non-scattering absorbing slab has the lowest TR that the transport models reach
+(scattering sends light back). Data just below that line - typical of weakly scattering
+samples with noise - cannot be fitted.
 """
 
 from __future__ import annotations
@@ -52,3 +57,20 @@ def check_measurement(tt: float, tr: float, n: float, n_out: float, diffuse_only
             f"tt = {tt:.6g} is above the unscattered limit {t_clear:.6g} of a clear slab with "
             f"n = {n}, n_outside = {n_out} (bound crossed: TT <= (1 - R0)/(1 + R0))"
         )
+
+
+def clear_slab_tr(tt: float, n: float, n_out: float, diffuse_only: bool) -> float:
+    """TR of the non-scattering, absorbing slab whose TT equals ``tt``.
+
+    With x = exp(-mua d) and R0 the normal-incidence Fresnel reflectance:
+    TT = (1 - R0)^2 x / (1 - R0^2 x^2), TR = R0 + (1 - R0)^2 R0 x^2 / (1 - R0^2 x^2).
+    """
+    r0 = specular(n, n_out)
+    a = (1.0 - r0) ** 2
+    if r0 * tt < 1e-12:
+        x = tt / a
+    else:
+        x = (-a + math.sqrt(a * a + 4.0 * r0 * r0 * tt * tt)) / (2.0 * r0 * r0 * tt)
+    x = min(x, 1.0)
+    tr = r0 + a * r0 * x * x / (1.0 - r0 * r0 * x * x)
+    return tr - r0 if diffuse_only else tr

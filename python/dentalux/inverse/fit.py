@@ -6,7 +6,7 @@ import time
 
 import numpy as np
 
-from dentalux.inverse.bounds import check_measurement, check_number
+from dentalux.inverse.bounds import check_measurement, check_number, clear_slab_tr
 from dentalux.inverse.models import MODELS, Sample, get_model
 from dentalux.inverse.models.boundary import specular
 from dentalux.inverse.optimise import LOG_HI, LOG_LO, grid_start, jacobian, solve
@@ -130,6 +130,10 @@ def fit(tt: float, tr: float, n: float, g: float, thickness: float, model: str =
     if sol.residual > limit:
         at_edge = np.isclose(sol.x, LOG_LO, atol=1e-6)
         where = " (mua reached its lower limit)" if at_edge[0] else ""
+        tr_clear = clear_slab_tr(tt, n, n_outside, bool(tr_diffuse_only))
+        if tr < tr_clear:
+            where += (f"; tr is below {tr_clear:.5f}, the TR of a non-scattering slab with "
+                      "this TT (bound crossed: TR >= TR_clear(TT))")
         raise ValueError(
             f"model {model!r} cannot reproduce tt = {tt}, tr = {tr} for n = {n}, g = {g}, "
             f"thickness = {thickness} mm: closest fit tt = {sol.values[0]:.5f}, "
