@@ -171,7 +171,7 @@ def fig4(out: Path, quality: Quality, thickness_mm: float) -> dict:
         "material_provenance": scaled.provenance})
 
 
-def cornell_teeth_scene(quality: Quality, box_mm: float = 40.0) -> dict:
+def cornell_teeth_scene(quality: Quality, box_mm: float = 60.0) -> dict:
     """Three procedural teeth standing in a small Cornell box (y up, open towards -z)."""
     from dentalux.scene.builtin import GREEN, RED
 
@@ -232,10 +232,11 @@ def crown_scene(quality: Quality) -> tuple[dict, dict]:
                 "enamel": enamel_medium, "dentin": "dentin", "outside": "air",
                 "transform": {"rotate": [up], "translate": [x, 0.0, 0.0]}}
 
+    fov, eye_y, dist = 30.0, 3.0, 60.0
     scene = {
         "scene": {"name": "crown", "description": "biomaterial crown beside a natural incisor"},
-        "camera": {"position": [0.0, 4.0, -60.0], "look_at": [0.0, 4.0, 0.0],
-                   "up": [0.0, 1.0, 0.0], "fov_deg": 26.0, "resolution": [w, h]},
+        "camera": {"position": [0.0, eye_y, -dist], "look_at": [0.0, eye_y, 0.0],
+                   "up": [0.0, 1.0, 0.0], "fov_deg": fov, "resolution": [w, h]},
         "media": {"enamel": {"material": "enamel"}, "dentin": {"material": "dentin"},
                   "crown": {"material": "biomaterial-table1"}},
         "surfaces": {"backdrop": {"type": "lambertian", "reflectance": 0.18}},
@@ -249,13 +250,13 @@ def crown_scene(quality: Quality) -> tuple[dict, dict]:
                     "u": [80.0, 0.0, 0.0], "v": [0.0, 0.0, 40.0], "radiance": 3.0,
                     "spectrum": "D65"}],
     }
-    # crown centres project to x = ±6.5 mm, y from 4 to 8 mm (labial middle third) at 60 mm
-    scale = h / (2 * 60.0 * math.tan(math.radians(13.0)))
+    # pinhole projection of the labial face (z ≈ -3.5 mm after the rotation) to pixels
+    px_per_mm = (h / 2) / ((dist - 3.5) * math.tan(math.radians(fov / 2)))
 
-    def rect(x_mm):
-        cx, cy = w / 2 + x_mm * scale, h / 2 - (6.0 - 4.0) * scale
-        hw, hh = 1.5 * scale, 1.5 * scale
-        return [int(cx - hw), int(cy - hh), int(cx + hw), int(cy + hh)]
+    def rect(x_mm, y_mm=5.0, half_mm=1.5):
+        cx, cy = w / 2 + x_mm * px_per_mm, h / 2 - (y_mm - eye_y) * px_per_mm
+        r = half_mm * px_per_mm
+        return [int(cx - r), int(cy - r), int(cx + r) + 1, int(cy + r) + 1]
 
     return scene, {"natural": rect(-6.5), "crown": rect(6.5)}
 
@@ -271,7 +272,7 @@ def fig_crown(out: Path, quality: Quality) -> dict:
     summary["delta_e00"] = de
     summary["verdict"] = verdict(de)
     _annotate(out / "crown_vs_natural" / "image.png", out / "crown_vs_natural.png", regions,
-              f"ΔE00 crown vs natural = {de:.2f} ({summary['verdict']})")
+              f"ΔE00 = {de:.2f} ({summary['verdict']})")
     (out / "crown_vs_natural" / "figure.json").write_text(
         json.dumps(summary, indent=2, default=str))
     return summary
@@ -293,7 +294,7 @@ def _annotate(src: Path, dst: Path, regions: dict, text: str) -> None:
         ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec="w", lw=0.8))
         ax.text(x0, y0 - 3, name, color="w", fontsize=6)
     ax.axis("off")
-    fig.text(0.5, 1 - 20 / (h + 40), text, ha="center", va="center", fontsize=8)
+    fig.text(0.5, 1 - 20 / (h + 40), text, ha="center", va="center", fontsize=7)
     fig.savefig(dst, dpi=100)
     plt.close(fig)
 
@@ -334,16 +335,20 @@ def vpm_vs_volpath(out: Path, quality: Quality, thickness_mm: float = 0.5) -> di
 FIGURES = ("fig2", "fig3", "fig4", "fig5", "crown", "crop")
 
 
-def make_figures(out_dir, quality: str = "preview", only=None, log=print) -> dict:
-    """Render the figures named in ``only`` (default all of FIGURES) into ``out_dir``;
-    returns and writes ``figures.json`` with each figure's summary."""
-    if quality not in QUALITIES:
+def make_figures(out_dir, quality: str | Quality = "preview", only=None, log=print) -> dict:
+    """Render the figures named in ``only`` (default all of FIGURES) into ``out_dir`` at a
+    quality level (a name of QUALITIES or a Quality); returns and writes ``figures.json``
+    with each figure's summary."""
+    if isinstance(quality, Quality):
+        q = quality
+    elif quality in QUALITIES:
+        q = QUALITIES[quality]
+    else:
         raise ValueError(f"quality = {quality!r}: allowed {', '.join(QUALITIES)}")
     todo = list(FIGURES if not only else only)
     for f in todo:
         if f not in FIGURES:
             raise ValueError(f"figure {f!r}: allowed {', '.join(FIGURES)}")
-    q = QUALITIES[quality]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     jobs = {
@@ -354,7 +359,7 @@ def make_figures(out_dir, quality: str = "preview", only=None, log=print) -> dic
         "crown": lambda: [fig_crown(out, q)],
         "crop": lambda: [vpm_vs_volpath(out, q)],
     }
-    report = {"quality": quality, "figures": {}}
+    report = {"quality": q.name, "figures": {}}
     for f in todo:
         t0 = time.perf_counter()
         log(f"rendering {f} ({quality}) ...")
