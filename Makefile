@@ -6,7 +6,7 @@ PIP := $(VENV)/bin/pip
 STAMP := $(VENV)/.deps-stamp
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
-.PHONY: demo test setup build-dev build-prod lint fmt rust-test py-test validate bench clean
+.PHONY: readme-figures demo test setup build-dev build-prod lint fmt rust-test py-test validate bench clean
 
 $(STAMP): pyproject.toml
 	python3 -m venv $(VENV)
@@ -25,8 +25,15 @@ build-prod: setup
 build-dev: setup
 	VIRTUAL_ENV=$(abspath $(VENV)) $(VENV)/bin/maturin develop --quiet --extras test,cluster
 
+# The main job: the paper's figures at preview quality (a few minutes on 2 cores).
 demo: build-prod
-	$(VENV)/bin/dentalux demo
+	$(VENV)/bin/dentalux demo --photons 200000
+	$(VENV)/bin/dentalux figures --out figures --quality preview
+
+# Regenerate the PNGs the README shows (docs/figures/) from a preview render.
+readme-figures: build-prod
+	$(VENV)/bin/dentalux figures --out figures --quality preview
+	mkdir -p docs/figures && cp figures/*.png docs/figures/
 
 lint: setup
 	cargo fmt --all -- --check
