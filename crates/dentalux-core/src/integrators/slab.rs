@@ -266,7 +266,8 @@ pub fn simulate(cfg: &SlabConfig, control: &Control) -> Result<SlabResult> {
     let batch = batch_size(cfg.n_photons);
     let n_batches = cfg.n_photons.div_ceil(batch);
     let tracer = Tracer::new(cfg);
-    let tallies: Vec<Result<Tally>> = (0..n_batches)
+    // collecting into a Result stops handing out batches after the first error
+    let tallies: Result<Vec<Tally>> = (0..n_batches)
         .into_par_iter()
         .map(|b| {
             control.check()?;
@@ -287,8 +288,8 @@ pub fn simulate(cfg: &SlabConfig, control: &Control) -> Result<SlabResult> {
         })
         .collect();
     let mut total = Tally::new(cfg);
-    for t in tallies {
-        total.merge(&t?);
+    for t in &tallies? {
+        total.merge(t);
     }
     Ok(tracer.finish(&total))
 }
