@@ -65,6 +65,8 @@ class LocalExecutor:
     """Run tasks in this process, in key order."""
 
     name = "local"
+    workers = 1  # tasks at a time
+    task_threads = None  # each task uses the threads its settings ask for (default all)
 
     def map(
         self,
@@ -118,6 +120,13 @@ class DaskExecutor:
                 f"cluster = {address!r}: allowed 'local:N' or 'tcp://HOST:PORT'"
             )
         self.threads_per_worker = threads_per_worker
+        # each task's Rust pool gets its worker's threads, so workers do not oversubscribe
+        self.task_threads = threads_per_worker
+
+    @property
+    def workers(self) -> int:
+        """Tasks the cluster runs at a time (worker threads, at least 1)."""
+        return max(1, sum(self.client.nthreads().values()))
 
     def map(
         self,

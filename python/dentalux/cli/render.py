@@ -9,6 +9,7 @@ hash, bands, settings, timings, photon counts, peak memory) and a grey PNG previ
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -60,6 +61,18 @@ def render_command(
     k: int = typer.Option(None, help="nearest photons in a radiance estimate"),
     radius: float = typer.Option(None, help="maximum photon search radius [mm]"),
     step: float = typer.Option(None, help="ray-marching step inside media [mm]"),
+    passes: int = typer.Option(None, help="progressive passes (ppm: Knaus-Zwicker passes; "
+                               "others: independent seeds), one task per band and pass"),
+    time_budget: float = typer.Option(None, "--time-budget",
+                                      help="progressive: stop after about SECONDS"),
+    target_rmse: float = typer.Option(
+        None, "--target-rmse",
+        help="progressive: stop when the estimated relative error (spread of the per-pass "
+             "images) falls to X, e.g. 0.02"),
+    alpha: float = typer.Option(None, help="ppm radius reduction alpha in (0, 1)"),
+    cluster: str = typer.Option(
+        None, help="run the band x pass tasks on Dask: local:N (LocalCluster of N workers) "
+                   "or tcp://HOST:PORT (a running scheduler)"),
     as_json: bool = typer.Option(False, "--json", help="print render.json on stdout"),
 ) -> None:
     """Render a scene to DIR/radiance.npy, DIR/render.json and PNG previews."""
@@ -67,12 +80,21 @@ def render_command(
     scene = load_scene(scene_file)
     band_list = parse_bands(bands)
     options = {k_: v for k_, v in (("volume_photons", volume_photons), ("k", k),
-                                   ("radius", radius), ("step", step)) if v is not None}
-    result = render(scene, integrator=integrator, spp=spp, photons=photons, bands=band_list,
-                    seed=seed, threads=threads, resolution=parse_resolution(resolution),
-                    progress=None if not as_json else False, **options)
+                                   ("radius", radius), ("step", step), ("alpha", alpha))
+               if v is not None}
+    common = dict(integrator=integrator, spp=spp, photons=photons, bands=band_list,
+                  seed=seed, threads=threads, resolution=parse_resolution(resolution),
+                  progress=None if not as_json else False, **options)
+    progressive = any(x is not None for x in (passes, time_budget, target_rmse, cluster))
+    if progressive:
+        result = _render_progressive(scene, passes, time_budget, target_rmse, cluster, common)
+    else:
+        result = render(scene, **common)
     warn = None if as_json else (lambda msg: print(msg, file=sys.stderr))
     summary = write_render_outputs(scene, result, out, scene_file=str(scene_file), warn=warn)
+    if progressive:
+        summary["progressive"] = _finite(result.stats["progressive"])
+        summary["radius_last"] = summary["progressive"]["radius_last"]
     summary["timings"]["total_s"] = time.perf_counter() - t0
     summary["peak_memory_bytes"] = peak_memory_bytes()
     (out / "render.json").write_text(json.dumps(summary, indent=2))
@@ -84,8 +106,41 @@ def render_command(
               f"bands {', '.join(f'{b:g}' for b in result.bands)} nm, "
               f"{result.settings['integrator']}, {summary['timings']['total_s']:.2f} s")
         print("mean radiance per band: " + ", ".join(f"{m:.4g}" for m in mean))
+        if progressive:
+            pr = summary["progressive"]
+            err = "n/a" if pr["error_estimate"] is None else f"{100 * pr['error_estimate']:.2f} %"
+            radii = ", ".join(f"{k} {v:.4g} mm" for k, v in pr["radius_last"].items())
+            print(f"{pr['passes']} passes ({pr['stop']}) on {pr['executor']} "
+                  f"({pr['workers']} worker(s)), error estimate {err}"
+                  + (f", last radius: {radii}" if radii else ""))
         print(f"wrote {out}/radiance.npy, render.json, previews"
               + (", colour images" if "colour" in summary else ""))
+
+
+def _render_progressive(scene, passes, time_budget, target_rmse, cluster, common):
+    """The band x pass tasks through the executor named by ``cluster`` (default local)."""
+    from dentalux.distributed import make_executor
+    from dentalux.progressive import StopRule, render_progressive
+
+    if passes is None and time_budget is None and target_rmse is None:
+        passes = scene.render_defaults.get("passes", 1)
+    stop = StopRule(passes=passes, time_budget=time_budget, target_rmse=target_rmse)
+    executor = make_executor(cluster)
+    try:
+        return render_progressive(scene, stop, executor=executor, **common)
+    finally:
+        executor.close()
+
+
+def _finite(x):
+    """JSON-safe copy: inf/nan floats become null."""
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_finite(v) for v in x]
+    return x
 
 
 def register(app: typer.Typer) -> None:

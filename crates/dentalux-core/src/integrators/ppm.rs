@@ -16,6 +16,7 @@
 
 use crate::control::Control;
 use crate::error::{Error, Result};
+use crate::integrators::photon_trace::PhotonMaps;
 use crate::integrators::photon_trace::{trace_photons_with, StoreMode, Targets, SURFACE_PASS};
 use crate::integrators::render::{render_tiles, Settings, Stats};
 use crate::integrators::vpm::{default_radius, Vpm, VpmParams};
@@ -23,7 +24,8 @@ use crate::photon_map::PHOTON_BYTES;
 use crate::scene::Scene;
 use std::time::Instant;
 
-/// Most passes (the pass index must fit the stream tags below the surface-pass bit).
+/// Bound on the pass number: passes run 1 ..= MAX_PASSES − 1 (the pass number must fit the
+/// stream tags below the surface-pass bit).
 pub const MAX_PASSES: u32 = 4096;
 
 /// r_i / r_1 for pass `i` (1-based) in `dim` dimensions with parameter `alpha`.
@@ -35,15 +37,21 @@ pub fn radius_ratio(i: u32, alpha: f64, dim: i32) -> f64 {
     f.powf(1.0 / dim as f64)
 }
 
-/// Render a band with probabilistic progressive photon mapping: `settings.passes` passes of
-/// `settings.volume_photons` volume and `settings.photons` surface photons each.
-pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(Vec<f32>, Stats)> {
-    if settings.passes > MAX_PASSES {
-        return Err(Error::InvalidInput(format!(
-            "settings.passes = {} is out of range: allowed [1, {MAX_PASSES}]",
-            settings.passes
-        )));
-    }
+/// Seed of the camera pass of pass `pass` (1-based): `seed ^ (pass << 40)`. Other
+/// integrators use it for their `pass_index` > 0 too, so every pass has its own streams.
+pub fn pass_seed(seed: u64, pass: u32) -> u64 {
+    seed ^ ((pass as u64) << 40)
+}
+
+/// The photon maps of pass `pass` (1-based): `settings.volume_photons` volume photons with
+/// tag `pass · 2³²` and `settings.photons` surface photons with tag `SURFACE_PASS | pass · 2³²`.
+fn trace_pass(
+    scene: &Scene,
+    settings: &Settings,
+    control: &Control,
+    pass: u32,
+) -> Result<PhotonMaps> {
+    let tag = (pass as u64) << 32;
     let (seed, band) = (settings.seed, settings.band);
     let vol_only = Targets {
         volume: true,
@@ -53,6 +61,82 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
         volume: false,
         surface: true,
     };
+    let mut maps = trace_photons_with(
+        scene,
+        settings.volume_photons,
+        StoreMode::All,
+        vol_only,
+        tag,
+        seed,
+        band,
+        control,
+    )?;
+    let surf = trace_photons_with(
+        scene,
+        settings.photons,
+        StoreMode::All,
+        surf_only,
+        SURFACE_PASS | tag,
+        seed,
+        band,
+        control,
+    )?;
+    maps.surface = surf.surface;
+    maps.trace_seconds += surf.trace_seconds;
+    maps.build_seconds += surf.build_seconds;
+    Ok(maps)
+}
+
+/// The estimator of one pass's maps, before its radii are set.
+fn pass_estimator<'a>(scene: &'a Scene, settings: &Settings, maps: &'a PhotonMaps) -> Vpm<'a> {
+    let params = VpmParams {
+        k: settings.k,
+        radius: settings.radius,
+        step: settings.step,
+        mode: StoreMode::All,
+        max_depth: settings.max_depth,
+        ..VpmParams::default()
+    };
+    Vpm::new(scene, maps, params)
+}
+
+/// Pass 1's radii r_1 [mm]: per medium and for the surface map. `settings.radius` when
+/// given, else half the `vpm` default (k photons at the mean density of pass 1's maps).
+fn first_radii(
+    scene: &Scene,
+    settings: &Settings,
+    maps: &PhotonMaps,
+    vpm: &Vpm,
+) -> (Vec<f64>, f64) {
+    let vol = (0..scene.media.len())
+        .map(|i| {
+            settings
+                .radius
+                .unwrap_or(0.5 * default_radius(&maps.volume[i], settings.k, false))
+        })
+        .collect();
+    (vol, settings.radius.unwrap_or(0.5 * vpm.surface_radius))
+}
+
+/// Render a band with probabilistic progressive photon mapping: passes
+/// `settings.pass_index + 1 ..= settings.pass_index + settings.passes` of the schedule, each
+/// of `settings.volume_photons` volume and `settings.photons` surface photons, averaged.
+///
+/// A pass depends only on (scene, settings without `pass_index`/`passes`, pass number), so
+/// the mean of single-pass renders (`passes = 1`, `pass_index = p`) over p = 0..N−1 in pass
+/// order equals the `passes = N` render. A render that starts after pass 1 without a fixed
+/// `settings.radius` first traces pass 1's maps to find r_1 (and drops them): it costs one
+/// more photon pass, not more memory.
+pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(Vec<f32>, Stats)> {
+    let first = settings.pass_index as u64 + 1;
+    let last = settings.pass_index as u64 + settings.passes as u64;
+    if last >= MAX_PASSES as u64 {
+        return Err(Error::InvalidInput(format!(
+            "settings.pass_index + settings.passes = {last} is out of range: allowed [1, {}]",
+            MAX_PASSES - 1
+        )));
+    }
+    let (first, last) = (first as u32, last as u32);
     let cam = &scene.camera;
     let mut sum = vec![0.0f64; cam.width * cam.height];
     let mut stats = Stats {
@@ -61,56 +145,31 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
         ..Stats::default()
     };
     let mut r1: Option<(Vec<f64>, f64)> = None;
-    let mut last = (Vec::new(), 0.0);
-    for pass in 1..=settings.passes {
-        let tag = (pass as u64) << 32;
-        let mode = StoreMode::All;
-        let mut maps = trace_photons_with(
-            scene,
-            settings.volume_photons,
-            mode,
-            vol_only,
-            tag,
-            seed,
-            band,
-            control,
-        )?;
-        let surf = trace_photons_with(
-            scene,
-            settings.photons,
-            mode,
-            surf_only,
-            SURFACE_PASS | tag,
-            seed,
-            band,
-            control,
-        )?;
-        maps.surface = surf.surface;
-        stats.seconds_photons += maps.trace_seconds + surf.trace_seconds;
-        stats.seconds_build += maps.build_seconds + surf.build_seconds;
+    if first > 1 && settings.radius.is_none() {
+        // pilot: pass 1's maps give r_1, as in a render from pass 1
+        let maps = trace_pass(scene, settings, control, 1)?;
+        let vpm = pass_estimator(scene, settings, &maps);
+        r1 = Some(first_radii(scene, settings, &maps, &vpm));
+        stats.seconds_photons += maps.trace_seconds;
+        stats.seconds_build += maps.build_seconds;
+        stats.photon_map_bytes = maps.bytes() as u64;
+        stats.extra.push((
+            "pilot_photons".into(),
+            (settings.volume_photons + settings.photons) as f64,
+        ));
+    }
+    let mut last_radii = (Vec::new(), 0.0);
+    for pass in first..=last {
+        let maps = trace_pass(scene, settings, control, pass)?;
+        stats.seconds_photons += maps.trace_seconds;
+        stats.seconds_build += maps.build_seconds;
         stats.photons_emitted += settings.volume_photons + settings.photons;
         stats.photons_stored += maps.stored() as u64;
         stats.photon_map_bytes = stats.photon_map_bytes.max(maps.bytes() as u64);
-        let params = VpmParams {
-            k: settings.k,
-            radius: settings.radius,
-            step: settings.step,
-            mode,
-            max_depth: settings.max_depth,
-            ..VpmParams::default()
-        };
-        let mut vpm = Vpm::new(scene, &maps, params);
-        let (vol_r1, surf_r1) = r1.get_or_insert_with(|| {
-            let k = settings.k;
-            let vol = (0..scene.media.len())
-                .map(|i| {
-                    settings
-                        .radius
-                        .unwrap_or(0.5 * default_radius(&maps.volume[i], k, false))
-                })
-                .collect();
-            (vol, settings.radius.unwrap_or(0.5 * vpm.surface_radius))
-        });
+        let mut vpm = pass_estimator(scene, settings, &maps);
+        let (vol_r1, surf_r1) = r1
+            .get_or_insert_with(|| first_radii(scene, settings, &maps, &vpm))
+            .clone();
         let (fv, fs) = (
             radius_ratio(pass, settings.alpha, 3),
             radius_ratio(pass, settings.alpha, 2),
@@ -118,10 +177,10 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
         for (m, r) in vpm.media.iter_mut().zip(vol_r1.iter()) {
             m.radius = r * fv;
         }
-        vpm.surface_radius = *surf_r1 * fs;
+        vpm.surface_radius = surf_r1 * fs;
         vpm.fixed_radius = true;
         let pass_settings = Settings {
-            seed: seed ^ ((pass as u64) << 40),
+            seed: pass_seed(settings.seed, pass),
             ..*settings
         };
         let t0 = Instant::now();
@@ -133,17 +192,20 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
         for (s, v) in sum.iter_mut().zip(&image) {
             *s += *v as f64;
         }
-        last = (
+        last_radii = (
             vpm.media.iter().map(|m| m.radius).collect(),
             vpm.surface_radius,
         );
     }
     let n = settings.passes as f64;
     let image = sum.iter().map(|s| (s / n) as f32).collect();
-    stats.radius = last.1;
+    stats.radius = last_radii.1;
     stats.extra.push(("passes".into(), n));
-    stats.extra.push(("surface_radius_last".into(), last.1));
-    for (i, r) in last.0.iter().enumerate() {
+    stats.extra.push(("pass_first".into(), first as f64));
+    stats
+        .extra
+        .push(("surface_radius_last".into(), last_radii.1));
+    for (i, r) in last_radii.0.iter().enumerate() {
         if scene.media[i].sigma_s > 0.0 {
             stats.extra.push((format!("radius_medium{i}_last"), *r));
         }

@@ -85,6 +85,10 @@ pub struct Settings {
     pub passes: u32,
     /// Progressive photon mapping radius reduction α in (0, 1).
     pub alpha: f64,
+    /// First pass to render, 0-based: `ppm` renders passes `pass_index + 1 ..= pass_index +
+    /// passes` of its schedule (one task per pass for distributed renders); other
+    /// integrators draw from an independent seed stream per pass index (0 = the plain seed).
+    pub pass_index: u32,
     /// `pm`: final gathering (one diffuse bounce before the density estimate).
     pub final_gather: bool,
 }
@@ -104,6 +108,7 @@ impl Default for Settings {
             max_depth: 64,
             passes: 1,
             alpha: 0.7,
+            pass_index: 0,
             final_gather: false,
         }
     }
@@ -271,6 +276,16 @@ pub fn render_band(
 ) -> Result<(Vec<f32>, Stats)> {
     settings.validate()?;
     let t0 = Instant::now();
+    let reseeded;
+    let settings = if settings.pass_index > 0 && settings.integrator != Integrator::Ppm {
+        reseeded = Settings {
+            seed: super::ppm::pass_seed(settings.seed, settings.pass_index),
+            ..*settings
+        };
+        &reseeded
+    } else {
+        settings
+    };
     let (image, mut stats) = match settings.integrator {
         Integrator::Path => super::path::render(scene, settings, control)?,
         Integrator::Pm => super::pm::render(scene, settings, control)?,
