@@ -109,7 +109,7 @@ def test_progressive_equals_render_and_target_error_stops():
 def test_error_estimate_predicts_the_spread_between_independent_renders():
     # two 24-pass renders with different seeds differ by noise only (same schedule), so
     # rms(a - b) / sqrt(2) / mean is the noise the estimate claims; per-pixel outliers make the
-    # image-level comparison loose: a factor 1.5 either way
+    # image-level comparison loose: a factor 1.3 either way (measured 0.96-1.01)
     kw = {**TINY, "resolution": (24, 18)}
     a = render_progressive(DISCS, StopRule(passes=24), bands=[540], progress=False, **kw)
     kw["seed"] = 11
@@ -117,7 +117,7 @@ def test_error_estimate_predicts_the_spread_between_independent_renders():
     x, y = a.radiance[..., 0].astype(np.float64), b.radiance[..., 0].astype(np.float64)
     seen = math.sqrt(float(((x - y) ** 2).mean()) / 2) / float((x + y).mean() / 2)
     est = (a.stats["progressive"]["error_estimate"] + b.stats["progressive"]["error_estimate"]) / 2
-    assert 1 / 1.5 < est / seen < 1.5, (est, seen)
+    assert 1 / 1.3 < est / seen < 1.3, (est, seen)
 
 
 def test_time_budget_stops():
