@@ -21,7 +21,6 @@ import sys
 import time
 
 import numpy as np
-
 from dentalux.distributed import DaskExecutor, LocalExecutor
 from dentalux.progressive import StopRule, render_progressive
 from dentalux.scene.builtin import discs
