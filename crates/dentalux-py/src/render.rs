@@ -574,10 +574,7 @@ fn settings_from_json(text: &str) -> R<(Settings, Option<usize>)> {
         max_depth: to_u32("max_depth", o.uint_or("max_depth", d.max_depth as u64)?)?,
         passes: to_u32("passes", o.uint_or("passes", d.passes as u64)?)?,
         alpha: o.num_or("alpha", d.alpha)?,
-        pass_index: to_u32(
-            "pass_index",
-            o.uint_or("pass_index", d.pass_index as u64)?,
-        )?,
+        pass_index: to_u32("pass_index", o.uint_or("pass_index", d.pass_index as u64)?)?,
         final_gather: match o.opt("final_gather") {
             Some((v, p)) => Node { v, path: &p }.boolean()?,
             None => d.final_gather,
