@@ -27,6 +27,11 @@ impl Stream {
     pub fn uniform(&mut self) -> f64 {
         (self.0.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
+    /// 64 raw random bits (e.g. two 32-bit uniforms where 32 bits of resolution suffice).
+    #[inline]
+    pub fn next_bits(&mut self) -> u64 {
+        self.0.next_u64()
+    }
     /// Uniform in (0, 1]: safe as the argument of a logarithm.
     #[inline]
     pub fn uniform_open0(&mut self) -> f64 {

@@ -35,7 +35,7 @@ use crate::math::{rotate_direction_scaled, Vec3};
 use crate::medium::Medium;
 use crate::phase::PhaseFunction;
 use crate::rng::Stream;
-use crate::sampling::{cosine_hemisphere, sample_azimuth_scaled};
+use crate::sampling::{cosine_hemisphere, sample_azimuth_scaled_bits};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -514,7 +514,7 @@ impl<'a> Tracer<'a> {
                         cfg.layers[li].medium.phase.sample_cos([u0, u1])
                     }
                 };
-                let (c, s, rho) = sample_azimuth_scaled(|| rng.uniform());
+                let (c, s, rho) = sample_azimuth_scaled_bits(|| rng.next_bits());
                 d = rotate_direction_scaled(d, cos_theta, c, s, rho);
                 scattered = true;
                 continue;
