@@ -14,16 +14,15 @@ from dentalux.inverse import fit, fit_table, write_spectrum_toml
 
 def _print_results(results) -> None:
     table = Table(title=f"inversion ({results[0].model})")
-    for col in ("λ [nm]", "TT", "TR", "μa [1/mm]", "μa interval", "μs [1/mm]", "μs interval",
-                "μs' [1/mm]", "fit TT", "fit TR", "residual"):
+    for col in ("λ [nm]", "μa [1/mm]", "μa interval", "μs [1/mm]", "μs interval",
+                "μs' [1/mm]", "residual"):
         table.add_column(col, justify="right")
     for r in results:
         mua = f"{r.mua:.4g}" if r.mua_resolved else f"≤ {r.mua_upper_bound:.3g}"
         table.add_row(
-            "" if r.wavelength_nm is None else f"{r.wavelength_nm:g}", f"{r.tt:.4f}",
-            f"{r.tr:.4f}", mua, f"[{r.mua_ci[0]:.3g}, {r.mua_ci[1]:.3g}]", f"{r.mus:.4g}",
-            f"[{r.mus_ci[0]:.3g}, {r.mus_ci[1]:.3g}]", f"{r.musp:.4g}", f"{r.fit_tt:.4f}",
-            f"{r.fit_tr:.4f}", f"{r.residual:.1e}",
+            "" if r.wavelength_nm is None else f"{r.wavelength_nm:g}", mua,
+            f"[{r.mua_ci[0]:.3g}, {r.mua_ci[1]:.3g}]", f"{r.mus:.4g}",
+            f"[{r.mus_ci[0]:.3g}, {r.mus_ci[1]:.3g}]", f"{r.musp:.4g}", f"{r.residual:.1e}",
         )
     Console().print(table)
     for r in results:
