@@ -58,6 +58,7 @@ validate: build-prod
 bench: build-prod
 	$(VENV)/bin/python benchmarks/slab.py
 	$(VENV)/bin/python benchmarks/inverse.py
+	$(VENV)/bin/python benchmarks/scaling.py
 
 clean:
 	cargo clean
