@@ -149,3 +149,9 @@ def test_cli_progressive_writes_passes_error_and_last_radius(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["render", str(DISCS), "--out", str(out), "--target-rmse", "2"])
     assert exc.value.code == 2 and "target_rmse" in capsys.readouterr().err
+
+
+def test_progress_bar_runs_for_every_stop_rule():
+    for stop in (StopRule(passes=2), StopRule(time_budget=0.3), StopRule(target_rmse=0.6)):
+        r = render_progressive(DISCS, stop, bands=[540], progress=True, **TINY)
+        assert r.stats["progressive"]["stop"] in ("passes", "time_budget", "target_rmse")
