@@ -536,3 +536,42 @@ fn clip_experiment() {
         }
     }
 }
+
+/// A hopeless medium (optical depth 10⁷, no absorption) must not hang the photon pass: a
+/// cancel stops it within a fraction of a second.
+#[test]
+fn photon_pass_cancels_promptly_in_a_hopeless_medium() {
+    let block = shape(
+        Geometry::Box(BoxShape {
+            min: Vec3::splat(-5.0),
+            max: Vec3::splat(5.0),
+        }),
+        Boundary::Dielectric {
+            inside: 1,
+            outside: 0,
+        },
+    );
+    let scene = Scene::new(
+        camera(Vec3::new(0.0, -50.0, 0.0), Vec3::ZERO, 4, 4),
+        vec![air(), medium(0.0, 1e6, 0.0, 1.0)],
+        vec![],
+        vec![block],
+        vec![Light::Point {
+            position: Vec3::new(0.0, 0.0, 20.0),
+            intensity: 1.0,
+        }],
+        0,
+    )
+    .unwrap();
+    let control = Control::new();
+    let start = std::time::Instant::now();
+    let r = std::thread::scope(|s| {
+        s.spawn(|| {
+            std::thread::sleep(std::time::Duration::from_millis(200));
+            control.cancel();
+        });
+        trace_photons(&scene, 1_000_000, StoreMode::All, 1, 0, &control)
+    });
+    assert!(r.is_err());
+    assert!(start.elapsed().as_secs_f64() < 5.0, "{:?}", start.elapsed());
+}

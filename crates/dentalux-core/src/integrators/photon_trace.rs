@@ -151,6 +151,7 @@ fn trace_batch(
     mode: StoreMode,
     targets: Targets,
     rng: &mut Stream,
+    control: &Control,
 ) -> BatchOut {
     let nm = scene.media.len();
     let mut out = BatchOut {
@@ -160,6 +161,10 @@ fn trace_batch(
     };
     let led = &mut out.ledger;
     for _ in 0..count {
+        // a long random walk (huge optical depth) must still stop promptly on cancel
+        if control.is_cancelled() {
+            break;
+        }
         let (li, p_light) = scene.pick_light(rng.uniform());
         let (mut ray, weight) = scene.lights[li].sample_emission(rng.uniform2(), rng.uniform2());
         // Φ_l / (N · P(l)): every photon carries Φ_total / N for uniform emission
@@ -296,7 +301,7 @@ pub fn trace_photons_with(
             .map(|b| {
                 let count = BATCH.min(photons - b * BATCH);
                 let mut rng = Stream::new(seed, band, PHOTON_STREAM | tag | b);
-                let o = trace_batch(scene, photons, count, mode, targets, &mut rng);
+                let o = trace_batch(scene, photons, count, mode, targets, &mut rng, control);
                 control.add_done(count);
                 o
             })

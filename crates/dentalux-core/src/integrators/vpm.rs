@@ -18,7 +18,7 @@
 //! |---|---|---|
 //! | `k` | 64 | photons per estimate |
 //! | `radius` [mm] | 2 · cbrt(3 k V / (4π n)) per medium: twice the radius that holds k photons at the map's mean density (V: bounding box of the map's photons, n: its photons); surface map: the 2-D analogue, at most 0.1 × scene diagonal | largest gathering radius |
-//! | `step` Δx [mm] | per medium min(0.5 / σt, scene diagonal / 64) | ray-marching step |
+//! | `step` Δx [mm] | per medium min(0.5 / σt, scene diagonal / 64); never below 1e-5 × diagonal | ray-marching step |
 
 use crate::control::Control;
 use crate::error::Result;
@@ -36,6 +36,9 @@ use std::time::Instant;
 /// Camera-path depth up to which a mismatched boundary splits into both reflection and
 /// refraction; deeper, one of the two is chosen by Fresnel (unbiased either way).
 const SPLIT_DEPTH: u32 = 2;
+/// Smallest march step as a fraction of the scene diagonal (a guard against settings that
+/// would make a camera ray take billions of steps).
+const MIN_STEP_FRACTION: f64 = 1e-5;
 /// Path weight below which Russian roulette starts.
 const RR_WEIGHT: f64 = 0.05;
 
@@ -144,6 +147,8 @@ impl<'a> Vpm<'a> {
                 } else {
                     diag / 64.0
                 });
+                // a step far below the scene's size would march for ever: floor it
+                let step = step.max(diag * MIN_STEP_FRACTION);
                 let radius = params.radius.unwrap_or_else(|| {
                     maps.volume
                         .get(i)
