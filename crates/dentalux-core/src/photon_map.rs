@@ -718,4 +718,30 @@ mod tests {
         let e_back = map.surface_irradiance(Vec3::new(5.0, 5.0, 0.0), -Vec3::Z, 400, 3.0, &mut nb);
         assert_eq!(e_back.count, 0);
     }
+
+    /// Throughput figures for the report (slow: run with `--ignored --nocapture`).
+    #[test]
+    #[ignore]
+    fn query_throughput() {
+        let n = 4_000_000;
+        let raw = random_map(n, 31, false);
+        let t = std::time::Instant::now();
+        let map = PhotonMap::build(raw);
+        let build = t.elapsed().as_secs_f64();
+        let mut s = Stream::new(32, 0, 0);
+        let mut nb = Neighbours::new();
+        let q = 200_000;
+        let t = std::time::Instant::now();
+        let mut found = 0;
+        for _ in 0..q {
+            let x = Vec3::new(s.uniform(), s.uniform(), s.uniform()) * 10.0;
+            map.knn(x, 64, 1.0, &mut nb);
+            found += nb.len();
+        }
+        let knn = t.elapsed().as_secs_f64();
+        println!(
+            "{n} photons: build {build:.2} s; k = 64 queries {:.2} µs each ({found} found)",
+            knn / q as f64 * 1e6
+        );
+    }
 }
