@@ -358,3 +358,16 @@ def test_data_below_the_clear_slab_line_is_refused_with_that_bound():
     tr = clear_slab_tr(tt, n, 1.0, False) - 0.0015
     with pytest.raises(ValueError, match=r"TR >= TR_clear\(TT\)"):
         fit(tt=tt, tr=tr, n=n, g=0.96, thickness=0.2, model="telegrapher")
+
+
+def test_mc_without_iadpython_uses_the_telegrapher_as_stand_in(monkeypatch):
+    # iadpython is optional at run time: mc then starts from and steers by the telegrapher.
+    import sys
+
+    fit_mod = sys.modules["dentalux.inverse.fit"]  # the module (the package exports the function)
+
+    monkeypatch.setattr(fit_mod, "_stand_in", lambda sample, q: get_model("telegrapher"))
+    tt, tr, n = ROWS[540]
+    r = fit(tt=tt, tr=tr, n=n, g=0.75, thickness=0.5, model="mc", photons=200_000)
+    assert r.converged and r.residual <= 1e-3 + 1e-12
+    assert r.evaluations <= 8
