@@ -184,7 +184,8 @@ def _interval(model, sample: Sample, target: np.ndarray, err: np.ndarray, x_fit:
     """
     vec = _vectorised(model, sample)
     scal = _scalar(model, sample)
-    j = jacobian(vec, x_fit) / mu_fit[None, :]
+    j_log = jacobian(vec, x_fit)
+    j = j_log / mu_fit[None, :]
     try:
         half = np.abs(np.linalg.inv(j)) @ err
     except np.linalg.LinAlgError:
@@ -192,10 +193,9 @@ def _interval(model, sample: Sample, target: np.ndarray, err: np.ndarray, x_fit:
     half = np.where(np.isfinite(half), half, 1e30)
     lo, hi = mu_fit - half, mu_fit + half
 
-    centre = solve(scal, target, x_fit, 1e-7, jac_fun=vec, max_iter=30,
-                   j0=jacobian(vec, x_fit))
+    centre = solve(scal, target, x_fit, 1e-7, jac_fun=vec, max_iter=30, j0=j_log)
     if centre.residual < 1e-4:
-        jc = jacobian(vec, centre.x)
+        jc = j_log  # x_fit is at or next to the centre: its slopes serve as chord slopes
         mu_c = np.exp(centre.x)
         r0 = specular(sample.n, sample.n_out)
         t_clear = (1.0 - r0) / (1.0 + r0)
