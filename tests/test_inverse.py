@@ -371,3 +371,15 @@ def test_mc_without_iadpython_uses_the_telegrapher_as_stand_in(monkeypatch):
     r = fit(tt=tt, tr=tr, n=n, g=0.75, thickness=0.5, model="mc", photons=200_000)
     assert r.converged and r.residual <= 1e-3 + 1e-12
     assert r.evaluations <= 8
+
+
+def test_ad_refuses_surroundings_other_than_air_and_mc_still_fits():
+    with pytest.raises(ValueError, match="n_outside = 1.33: model 'ad'"):
+        fit(tt=0.5, tr=0.2, n=1.5, g=0.5, thickness=1.0, n_outside=1.33, model="ad")
+    # mc in water, steered by the telegrapher; an independent Monte Carlo run checks it.
+    r = fit(tt=0.5, tr=0.2, n=1.5, g=0.5, thickness=1.0, n_outside=1.33, model="mc",
+            photons=200_000)
+    chk = simulate([Layer(mua=r.mua, mus=r.mus, g=0.5, n=1.5, thickness=1.0)],
+                   n_photons=400_000, seed=55, n_above=1.33, n_below=1.33, estimator="weighted")
+    assert abs(chk.total_transmittance - 0.5) < 0.003
+    assert abs(chk.total_reflectance - 0.2) < 0.003

@@ -35,7 +35,10 @@ def _scalar(model, sample: Sample):
 
 
 def _stand_in(sample: Sample, quad_pts):
-    """Cheap model with the same physics as mc: adding-doubling when installed."""
+    """Cheap model with the same physics as mc: adding-doubling when installed and the
+    surroundings are air (n_outside = 1), else the telegrapher model."""
+    if sample.n_out != 1.0:
+        return get_model("telegrapher")
     try:
         return get_model("ad", quad_pts=quad_pts)
     except ValueError:
@@ -101,6 +104,11 @@ def fit(tt: float, tr: float, n: float, g: float, thickness: float, model: str =
         tol = DEFAULT_TOL[model]
     tol = check_number("tol", tol, 0.0, 0.1, lo_open=True)
     check_measurement(tt, tr, n, n_outside, tr_diffuse_only)
+    if model == "ad" and n_outside != 1.0:
+        raise ValueError(
+            f"n_outside = {n_outside}: model 'ad' allows only 1 (iadpython reads n_outside as "
+            "glass slides with air beyond, not as a surrounding medium); use mc or telegrapher"
+        )
 
     sample = Sample(g=g, n=n, thickness=thickness, n_out=n_outside, fd=fd,
                     diffuse_only=bool(tr_diffuse_only))

@@ -4,6 +4,9 @@ Only iadpython's forward solution ``iad.Sample(...).rt()`` is used; its own inve
 (``Experiment.invert_rt``, 0.5.3) returns mua = 0 for weakly absorbing samples, so our
 optimiser drives it instead. iadpython assumes a pure HG phase function, so an isotropic
 fraction fd is folded into g_eff = (1 - fd) g (similarity; exact for the first moment only).
+Surroundings must be air: iadpython's n_above/n_below are glass slides with air beyond, so
+a sample in another medium (n_outside != 1) is refused by the fit (its forward numbers would
+differ from the slab simulator's by up to 0.06 in TR).
 Quadrature: 4 points (iadpython's default) is too coarse for forward-peaked scattering; we
 use 16 points below g = 0.9 and 32 above (24 when n = n_out); 16 -> 32 changes TT/TR by
 < 2e-4 on the tooth-optics.md anchors.
