@@ -8,12 +8,12 @@
 //! - [`volpath`]: the unbiased volumetric path tracer that judges them.
 //! - [`transport`]: boundary crossing, shadow-ray transmittance (eqs. 12–13), ray spawning.
 
-pub mod slab;
-pub mod photon_trace;
-pub mod transport;
-pub mod vpm;
-pub mod volpath;
 pub mod path;
+pub mod photon_trace;
 pub mod pm;
-pub mod render;
 pub mod ppm;
+pub mod render;
+pub mod slab;
+pub mod transport;
+pub mod volpath;
+pub mod vpm;
