@@ -29,7 +29,7 @@ use std::f64::consts::PI;
 pub const PHOTON_BYTES: usize = std::mem::size_of::<Photon>();
 
 /// Subtrees at most this long are scanned linearly instead of descended.
-const LEAF: usize = 8;
+const LEAF: usize = 16;
 /// Subtrees at least this long are built in parallel (rayon::join).
 const PAR_BUILD: usize = 16_384;
 /// Bits per octahedral coordinate.
@@ -107,12 +107,20 @@ impl Photon {
     }
 }
 
-/// A reusable buffer for k-nearest queries (a bounded max-heap of (distance², index)).
+/// A reusable buffer for k-nearest queries: the photons found so far, unordered, and the
+/// squared radius that still matters. Candidates are appended in O(1); when the buffer holds
+/// 2k of them it is cut back to the k nearest by a linear-time selection, which tightens the
+/// bound (amortised O(1) per candidate, against O(log k) sifts of a binary heap).
 #[derive(Debug, Default, Clone)]
 pub struct Neighbours {
-    heap: Vec<(f32, u32)>,
+    found: Vec<(f32, u32)>,
     k: usize,
-    r2_max: f32,
+    /// Squared search radius that still matters [mm²]: `r_max²` until k are found, then the
+    /// k-th smallest distance² among those found at the last cut.
+    bound: f32,
+    /// Buffer length that triggers the next cut.
+    cap: usize,
+    max_d2: f32,
 }
 
 impl Neighbours {
@@ -122,63 +130,52 @@ impl Neighbours {
     }
     /// Number of photons found.
     pub fn len(&self) -> usize {
-        self.heap.len()
+        self.found.len()
     }
     /// Whether no photon was found.
     pub fn is_empty(&self) -> bool {
-        self.heap.is_empty()
+        self.found.is_empty()
     }
     /// (distance² [mm²], index into [`PhotonMap::photons`]) of the photons found, unordered.
     pub fn items(&self) -> &[(f32, u32)] {
-        &self.heap
+        &self.found
     }
-    /// Squared search radius that still matters: the k-th distance once k are found.
-    #[inline]
-    fn bound(&self) -> f32 {
-        if self.heap.len() < self.k {
-            self.r2_max
-        } else {
-            self.heap[0].0
-        }
-    }
-    /// Largest squared distance among the photons found (0 when none).
+    /// Largest squared distance among the photons found [mm²] (0 when none).
     pub fn max_dist2(&self) -> f32 {
-        self.heap.first().map_or(0.0, |h| h.0)
+        self.max_d2
+    }
+    fn start(&mut self, k: usize, r2_max: f32) {
+        self.found.clear();
+        self.k = k.max(1);
+        self.bound = r2_max;
+        self.cap = self.k;
+        self.max_d2 = 0.0;
+    }
+    /// Keep the k nearest and tighten the bound to the k-th distance².
+    fn cut(&mut self) {
+        let k = self.k;
+        if self.found.len() > k {
+            self.found
+                .select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
+            self.found.truncate(k);
+            self.bound = self.found[k - 1].0;
+        } else if self.found.len() == k {
+            self.bound = self.found.iter().fold(0.0f32, |m, h| m.max(h.0));
+        }
+        self.cap = 2 * k.max(8);
     }
     #[inline]
     fn push(&mut self, d2: f32, i: u32) {
-        let h = &mut self.heap;
-        if h.len() < self.k {
-            // sift up
-            h.push((d2, i));
-            let mut c = h.len() - 1;
-            while c > 0 {
-                let p = (c - 1) / 2;
-                if h[p].0 >= h[c].0 {
-                    break;
-                }
-                h.swap(p, c);
-                c = p;
-            }
-        } else if d2 < h[0].0 {
-            // replace the root and sift down
-            h[0] = (d2, i);
-            let n = h.len();
-            let mut p = 0;
-            loop {
-                let l = 2 * p + 1;
-                if l >= n {
-                    break;
-                }
-                let r = l + 1;
-                let c = if r < n && h[r].0 > h[l].0 { r } else { l };
-                if h[p].0 >= h[c].0 {
-                    break;
-                }
-                h.swap(p, c);
-                p = c;
-            }
+        self.found.push((d2, i));
+        if self.found.len() >= self.cap {
+            self.cut();
         }
+    }
+    fn finish(&mut self) {
+        if self.found.len() > self.k {
+            self.cut();
+        }
+        self.max_d2 = self.found.iter().fold(0.0f32, |m, h| m.max(h.0));
     }
 }
 
@@ -298,44 +295,58 @@ impl PhotonMap {
     }
 
     /// The (at most) `k` photons nearest to `x` within `r_max` [mm], into `out`.
+    ///
+    /// Iterative descent with an explicit stack: the near side first, the far side pushed with
+    /// its squared distance to the splitting plane and skipped when popped if that exceeds the
+    /// bound found meanwhile.
     pub fn knn(&self, x: Vec3, k: usize, r_max: f64, out: &mut Neighbours) {
-        out.heap.clear();
-        out.k = k.max(1);
-        out.r2_max = (r_max * r_max) as f32;
+        out.start(k, (r_max * r_max) as f32);
         let q = [x.x as f32, x.y as f32, x.z as f32];
-        if !self.photons.is_empty() {
-            self.knn_rec(0, self.photons.len(), &q, out);
-        }
-    }
-
-    fn knn_rec(&self, lo: usize, hi: usize, q: &[f32; 3], out: &mut Neighbours) {
-        if hi - lo <= LEAF {
-            for i in lo..hi {
-                let d2 = dist2(&self.photons[i].pos, q);
-                if d2 <= out.bound() {
-                    out.push(d2, i as u32);
+        let ph = &self.photons[..];
+        // the tree is balanced: depth ≤ log2(n) + 1 < 64
+        let mut stack = [(0u32, 0u32, 0f32); 64];
+        let mut sp = 0usize;
+        let (mut lo, mut hi) = (0usize, ph.len());
+        loop {
+            while hi - lo > LEAF {
+                let mid = (lo + hi) / 2;
+                let p = &ph[mid];
+                let d2 = dist2(&p.pos, &q);
+                if d2 <= out.bound {
+                    out.push(d2, mid as u32);
+                }
+                let axis = p.axis();
+                let delta = q[axis] - p.pos[axis];
+                let plane = delta * delta;
+                let (near, far) = if delta < 0.0 {
+                    ((lo, mid), (mid + 1, hi))
+                } else {
+                    ((mid + 1, hi), (lo, mid))
+                };
+                if far.0 < far.1 && plane <= out.bound {
+                    stack[sp] = (far.0 as u32, far.1 as u32, plane);
+                    sp += 1;
+                }
+                (lo, hi) = near;
+            }
+            for (j, p) in ph[lo..hi].iter().enumerate() {
+                let d2 = dist2(&p.pos, &q);
+                if d2 <= out.bound {
+                    out.push(d2, (lo + j) as u32);
                 }
             }
-            return;
-        }
-        let mid = (lo + hi) / 2;
-        let p = &self.photons[mid];
-        let axis = p.axis();
-        let delta = q[axis] - p.pos[axis];
-        let (near, far) = if delta < 0.0 {
-            ((lo, mid), (mid + 1, hi))
-        } else {
-            ((mid + 1, hi), (lo, mid))
-        };
-        if near.0 < near.1 {
-            self.knn_rec(near.0, near.1, q, out);
-        }
-        let d2 = dist2(&p.pos, q);
-        if d2 <= out.bound() {
-            out.push(d2, mid as u32);
-        }
-        if delta * delta <= out.bound() && far.0 < far.1 {
-            self.knn_rec(far.0, far.1, q, out);
+            loop {
+                if sp == 0 {
+                    out.finish();
+                    return;
+                }
+                sp -= 1;
+                let (l, h, plane) = stack[sp];
+                if plane <= out.bound {
+                    (lo, hi) = (l as usize, h as usize);
+                    break;
+                }
+            }
         }
     }
 
@@ -728,20 +739,25 @@ mod tests {
         let t = std::time::Instant::now();
         let map = PhotonMap::build(raw);
         let build = t.elapsed().as_secs_f64();
-        let mut s = Stream::new(32, 0, 0);
-        let mut nb = Neighbours::new();
-        let q = 200_000;
-        let t = std::time::Instant::now();
-        let mut found = 0;
-        for _ in 0..q {
-            let x = Vec3::new(s.uniform(), s.uniform(), s.uniform()) * 10.0;
-            map.knn(x, 64, 1.0, &mut nb);
-            found += nb.len();
+        println!("{n} photons: build {build:.2} s");
+        // r_max: twice the radius holding k photons at this density (the camera pass's default)
+        for k in [64usize, 200] {
+            let r_max = 2.0 * (3.0 * k as f64 * 1000.0 / (4.0 * PI * n as f64)).cbrt();
+            let mut s = Stream::new(32, 0, 0);
+            let mut nb = Neighbours::new();
+            let q = 200_000;
+            let t = std::time::Instant::now();
+            let mut found = 0;
+            for _ in 0..q {
+                let x = Vec3::new(s.uniform(), s.uniform(), s.uniform()) * 10.0;
+                map.knn(x, k, r_max, &mut nb);
+                found += nb.len();
+            }
+            let knn = t.elapsed().as_secs_f64();
+            println!(
+                "k = {k} (r_max {r_max:.3} mm) queries {:.2} µs each ({found} found)",
+                knn / q as f64 * 1e6
+            );
         }
-        let knn = t.elapsed().as_secs_f64();
-        println!(
-            "{n} photons: build {build:.2} s; k = 64 queries {:.2} µs each ({found} found)",
-            knn / q as f64 * 1e6
-        );
     }
 }
