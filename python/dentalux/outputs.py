@@ -86,6 +86,8 @@ def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None =
         "files": files,
     }
     divisor, illuminant, white = colour_inputs(scene, result.bands)
+    if regions is None and tuple(result.radiance.shape[1::-1]) == tuple(scene.resolution):
+        regions = scene.description.get("regions") or None
     try:
         summary["colour"] = write_images(result.radiance / divisor, result.bands, out,
                                          illuminant=illuminant, regions=regions,

@@ -28,7 +28,7 @@ class SceneError(ValueError):
 
 REQUIRED = object()
 
-TOP_KEYS = ("scene", "render", "camera", "media", "surfaces", "shapes", "lights")
+TOP_KEYS = ("scene", "render", "camera", "media", "surfaces", "shapes", "lights", "regions")
 
 SCENE_KEYS = {"name": "", "description": "", "units": "mm"}
 
@@ -664,7 +664,28 @@ def validate(raw: Any) -> dict:
         raise SceneError("lights: the scene has no lights (add at least one [[lights]])")
     out["lights"] = [validate_light(i, s) for i, s in enumerate(lights)]
 
+    out["regions"] = validate_regions(raw.get("regions", {}), out["camera"]["resolution"])
     _check_names(out)
+    return out
+
+
+def validate_regions(regions: Any, resolution) -> dict:
+    """``[regions]``: named pixel rectangles ``[x0, y0, x1, y1]`` (x1, y1 exclusive) whose
+    mean CIELAB ``dentalux render`` writes to colour.json (what a spectrophotometer's
+    aperture would read there)."""
+    if not isinstance(regions, dict):
+        raise fail("regions", regions, "must be a table of named [x0, y0, x1, y1] rectangles")
+    w, h = resolution
+    out = {}
+    for name, rect in regions.items():
+        path = f"regions.{name}"
+        if isinstance(rect, (str, dict)) or not hasattr(rect, "__len__") or len(rect) != 4:
+            raise fail(path, rect, "must be [x0, y0, x1, y1] in pixels")
+        x0, y0, x1, y1 = (integer(v, f"{path}[{j}]", lo=0) for j, v in enumerate(rect))
+        if not (x0 < x1 <= w and y0 < y1 <= h):
+            raise fail(path, list(rect), f"need x0 < x1 <= {w} and y0 < y1 <= {h} (the "
+                                         "camera's resolution)")
+        out[name] = [x0, y0, x1, y1]
     return out
 
 
