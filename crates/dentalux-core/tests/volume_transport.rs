@@ -575,3 +575,147 @@ fn photon_pass_cancels_promptly_in_a_hopeless_medium() {
     assert!(r.is_err());
     assert!(start.elapsed().as_secs_f64() < 5.0, "{:?}", start.elapsed());
 }
+
+/// The paper's Fig. 3 scene (`scenes/discs.toml`, 540 nm: the fitted Table 1 biomaterial,
+/// μa 0.036 /mm, μs 5.83 /mm, g 0.75, n 1.54) at `w` × `h`.
+fn fig3_scene(w: usize, h: usize) -> Scene {
+    let quad = |corner: Vec3, u: Vec3, v: Vec3, surface: u32| {
+        shape(
+            Geometry::Quad(Quad { corner, u, v }),
+            Boundary::Opaque { surface },
+        )
+    };
+    let disc = |center: Vec3| {
+        shape(
+            Geometry::Cylinder(Cylinder {
+                center,
+                axis: Vec3::Z,
+                radius: 5.0,
+                height: 5.0,
+            }),
+            Boundary::Dielectric {
+                inside: 1,
+                outside: 0,
+            },
+        )
+    };
+    Scene::new(
+        Camera::new(
+            Vec3::new(0.0, -40.0, 35.0),
+            Vec3::new(0.0, 0.0, 2.5),
+            Vec3::Z,
+            30.0,
+            w,
+            h,
+        )
+        .unwrap(),
+        vec![air(), medium(0.036, 5.83, 0.75, 1.54)],
+        vec![
+            Surface::Checker {
+                a: 0.85,
+                b: 0.05,
+                size: 2.5,
+                mapping: Mapping::Xy,
+            },
+            Surface::Lambertian { reflectance: 0.25 },
+        ],
+        vec![
+            quad(
+                Vec3::new(-100.0, -100.0, -0.1),
+                Vec3::new(200.0, 0.0, 0.0),
+                Vec3::new(0.0, 200.0, 0.0),
+                1,
+            ),
+            quad(
+                Vec3::new(-25.0, -7.5, 0.0),
+                Vec3::new(50.0, 0.0, 0.0),
+                Vec3::new(0.0, 15.0, 0.0),
+                0,
+            ),
+            disc(Vec3::new(-8.0, 0.0, 0.01)),
+            disc(Vec3::new(8.0, 0.0, 5.0)),
+        ],
+        vec![Light::Quad {
+            corner: Vec3::new(-20.0, -40.0, 70.0),
+            u: Vec3::new(0.0, 40.0, 0.0),
+            v: Vec3::new(40.0, 0.0, 0.0),
+            radiance: 4.0,
+        }],
+        0,
+    )
+    .unwrap()
+}
+
+/// Where the camera-pass noise of `vpm` comes from on the Fig. 3 scene (one photon map, so
+/// photon noise is out): per-sample variance with jittered pixel positions against fixed pixel
+/// centres (the difference is the pixel-footprint integral: checker edges and silhouettes),
+/// split into pixels whose centre sees a disc and the rest. Run with `--ignored --nocapture`.
+#[test]
+#[ignore]
+fn fig3_noise_budget() {
+    let (w, h, spp) = (64, 48, 64);
+    let scene = fig3_scene(w, h);
+    let control = Control::new();
+    let maps = trace_photons(&scene, 1_000_000, StoreMode::Paper, 1, 0, &control).unwrap();
+    let cam = &scene.camera;
+    let sees_disc: Vec<bool> = (0..w * h)
+        .map(|i| {
+            let r = cam.ray((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+            scene
+                .intersect(&r, f64::INFINITY)
+                .is_some_and(|hit| hit.shape >= 2)
+        })
+        .collect();
+    for (jitter, light_strata) in [
+        (true, 1),
+        (false, 1),
+        (true, 3),
+        (false, 2),
+        (false, 3),
+        (false, 4),
+    ] {
+        let params = VpmParams {
+            k: 200,
+            light_strata,
+            ..VpmParams::default()
+        };
+        let vpm = Vpm::new(&scene, &maps, params);
+        let t = std::time::Instant::now();
+        let (m, v) = (0..w * h)
+            .into_par_iter()
+            .map(|i| {
+                let mut rng = Stream::new(5, 0, i as u64);
+                let mut sc = Scratch::default();
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                let (mut s, mut s2) = (0.0, 0.0);
+                for _ in 0..spp {
+                    let [jx, jy] = if jitter { rng.uniform2() } else { [0.5, 0.5] };
+                    let l = vpm.radiance(&cam.ray(x + jx, y + jy), &mut rng, &mut sc);
+                    s += l;
+                    s2 += l * l;
+                }
+                let mu = s / spp as f64;
+                (
+                    mu,
+                    (s2 / spp as f64 - mu * mu).max(0.0) * spp as f64 / (spp - 1) as f64,
+                )
+            })
+            .unzip::<f64, f64, Vec<f64>, Vec<f64>>();
+        let us = t.elapsed().as_secs_f64() / (w * h * spp) as f64 * 1e6;
+        let mu = mean(&m);
+        let part = |disc: bool| {
+            let idx: Vec<usize> = (0..w * h).filter(|&i| sees_disc[i] == disc).collect();
+            let var: f64 = idx.iter().map(|&i| v[i]).sum::<f64>();
+            (idx.len(), var)
+        };
+        let (nd, vd) = part(true);
+        let (no, vo) = part(false);
+        eprintln!(
+            "jitter {jitter}, light strata {light_strata}: mean {mu:.5}; 1-spp relative sd {:.1} % (disc pixels {nd}: {:.1} % of \
+             the variance; others {no}: {:.1} %); {us:.1} µs per sample (wall, all threads)",
+            100.0 * (mean(&v)).sqrt() / mu,
+            100.0 * vd / (vd + vo),
+            100.0 * vo / (vd + vo),
+        );
+    }
+}
