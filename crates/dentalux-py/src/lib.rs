@@ -16,5 +16,17 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(slab::phase_sample_cos, m)?)?;
     m.add_function(wrap_pyfunction!(slab::phase_eval, m)?)?;
     m.add_function(wrap_pyfunction!(render::render_band, m)?)?;
+    m.add_function(wrap_pyfunction!(panic_in_worker, m)?)?;
     Ok(())
+}
+
+/// Panic inside a worker thread, as a bug in the core would: for the test that a panic
+/// reaches Python as `RuntimeError` instead of aborting the interpreter.
+#[pyfunction]
+fn panic_in_worker(py: Python<'_>) -> PyResult<()> {
+    runner::run(py, Some(2), None, |_| -> dentalux_core::Result<()> {
+        let v: Vec<u32> = (0..4).collect();
+        rayon::scope(|s| s.spawn(|_| panic!("deliberate test panic at index {}", v[3])));
+        Ok(())
+    })
 }
