@@ -668,10 +668,20 @@ fn fig3_noise_budget() {
                 .is_some_and(|hit| hit.shape >= 2)
         })
         .collect();
-    for (jitter, light_strata) in [(true, 1), (false, 1), (true, 3), (false, 3), (false, 4)] {
+    for (jitter, light_strata, map_threshold) in [
+        (true, 1, 0.0),
+        (false, 1, 0.0),
+        (true, 3, 0.0),
+        (false, 3, 0.0),
+        (false, 4, 0.0),
+        (true, 3, 0.3),
+        (false, 3, 0.3),
+        (false, 3, 1.0),
+    ] {
         let params = VpmParams {
             k: 200,
             light_strata,
+            map_threshold,
             ..VpmParams::default()
         };
         let vpm = Vpm::new(&scene, &maps, params);
@@ -701,15 +711,18 @@ fn fig3_noise_budget() {
         let part = |disc: bool| {
             let idx: Vec<usize> = (0..w * h).filter(|&i| sees_disc[i] == disc).collect();
             let var: f64 = idx.iter().map(|&i| v[i]).sum::<f64>();
-            (idx.len(), var)
+            let mu: f64 = idx.iter().map(|&i| m[i]).sum::<f64>();
+            (idx.len(), var, mu / idx.len() as f64)
         };
-        let (nd, vd) = part(true);
-        let (no, vo) = part(false);
+        let (nd, vd, md) = part(true);
+        let (no, vo, _) = part(false);
         eprintln!(
-            "jitter {jitter}, light strata {light_strata}: mean {mu:.5}; 1-spp relative sd {:.1} % (disc pixels {nd}: {:.1} % of \
-             the variance; others {no}: {:.1} %); {us:.1} µs per sample (wall, all threads)",
+            "jitter {jitter}, light strata {light_strata}, map threshold {map_threshold}: mean \
+             {mu:.5}; 1-spp relative sd {:.1} % (disc pixels {nd}: {:.1} % of the variance, \
+             their own relative sd {:.1} %; others {no}: {:.1} %); {us:.1} µs per sample",
             100.0 * (mean(&v)).sqrt() / mu,
             100.0 * vd / (vd + vo),
+            100.0 * (vd / nd as f64).sqrt() / md,
             100.0 * vo / (vd + vo),
         );
     }
@@ -754,7 +767,7 @@ fn fig3_noise_budget() {
     }
     // photon noise: maps from other seeds (1 M volume, 50 k surface photons as in the preview
     // figures), pixel centres fixed and 16 spp so the camera's own noise is small
-    let maps_of = |seed: u64| {
+    let maps_of = |seed: u64, photons: u64| {
         let vol = Targets {
             volume: true,
             surface: false,
@@ -764,12 +777,12 @@ fn fig3_noise_budget() {
             surface: true,
         };
         let p = StoreMode::Paper;
-        let mut m = trace_photons_with(&scene, 1_000_000, p, vol, 0, seed, 0, &control).unwrap();
+        let mut m = trace_photons_with(&scene, photons, p, vol, 0, seed, 0, &control).unwrap();
         let s = trace_photons_with(&scene, 50_000, p, surf, SURFACE_PASS, seed, 0, &control);
         m.surface = s.unwrap().surface;
         m
     };
-    let (m1, m2) = (maps_of(11), maps_of(12));
+    let (m1, m2) = (maps_of(11, 1_000_000), maps_of(12, 1_000_000));
     // the phase function weights the k photons very unequally (HG g = 0.75): the effective
     // number of photons in an estimate, (Σ p)² / Σ p², averaged over points just under the
     // upper disc's top seen from the camera's direction
@@ -788,28 +801,33 @@ fn fig3_noise_budget() {
         neff += ws.iter().sum::<f64>().powi(2) / ws.iter().map(|w| w * w).sum::<f64>() / 25.0;
     }
     eprintln!("k = 200 under the top of the upper disc: effective photons {neff:.0}");
-    let mut mixed = maps_of(11);
+    let mut mixed = maps_of(11, 1_000_000);
     mixed.surface = m2.surface.clone();
-    let centre_image = |maps: &dentalux_core::integrators::photon_trace::PhotonMaps| -> Vec<f64> {
-        let params = VpmParams {
-            k: 200,
-            ..VpmParams::default()
+    let centre_image =
+        |maps: &dentalux_core::integrators::photon_trace::PhotonMaps, k: usize| -> Vec<f64> {
+            let params = VpmParams {
+                k,
+                ..VpmParams::default()
+            };
+            let vpm = Vpm::new(&scene, maps, params);
+            (0..w * h)
+                .into_par_iter()
+                .map(|i| {
+                    let mut rng = Stream::new(3, 0, i as u64);
+                    let mut sc = Scratch::default();
+                    let r = cam.ray((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+                    (0..16)
+                        .map(|_| vpm.radiance(&r, &mut rng, &mut sc))
+                        .sum::<f64>()
+                        / 16.0
+                })
+                .collect()
         };
-        let vpm = Vpm::new(&scene, maps, params);
-        (0..w * h)
-            .into_par_iter()
-            .map(|i| {
-                let mut rng = Stream::new(3, 0, i as u64);
-                let mut sc = Scratch::default();
-                let r = cam.ray((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
-                (0..16)
-                    .map(|_| vpm.radiance(&r, &mut rng, &mut sc))
-                    .sum::<f64>()
-                    / 16.0
-            })
-            .collect()
-    };
-    let (a, b, c) = (centre_image(&m1), centre_image(&m2), centre_image(&mixed));
+    let (a, b, c) = (
+        centre_image(&m1, 200),
+        centre_image(&m2, 200),
+        centre_image(&mixed, 200),
+    );
     let rel = |x: &[f64], y: &[f64]| 100.0 * rmse(x, y) / 2f64.sqrt() / mean(x);
     let disc =
         |x: &[f64]| -> Vec<f64> { (0..w * h).filter(|&i| sees_disc[i]).map(|i| x[i]).collect() };
@@ -824,4 +842,23 @@ fn fig3_noise_budget() {
         rel(&a, &c),
         rel(&c, &b)
     );
+    // the volume-map noise against k and photons (it does not fall with photons at fixed k)
+    let (q1, q2) = (maps_of(13, 4_000_000), maps_of(14, 4_000_000));
+    for (k, p1, p2) in [
+        (64, &m1, &m2),
+        (800, &m1, &m2),
+        (200, &q1, &q2),
+        (800, &q1, &q2),
+    ] {
+        let t = std::time::Instant::now();
+        let a = centre_image(p1, k);
+        let us = t.elapsed().as_secs_f64() / (w * h * 16) as f64 * 1e6;
+        let b = centre_image(p2, k);
+        eprintln!(
+            "k = {k}, {} stored volume photons: disc-pixel photon noise {:.1} %; {us:.1} µs per \
+             sample",
+            p1.volume[1].len(),
+            rel(&disc(&a), &disc(&b))
+        );
+    }
 }

@@ -42,6 +42,8 @@ const SPLIT_DEPTH: u32 = 2;
 const MIN_STEP_FRACTION: f64 = 1e-5;
 /// Path weight below which Russian roulette starts.
 const RR_WEIGHT: f64 = 0.05;
+/// Default of [`VpmParams::map_threshold`].
+pub const DEFAULT_MAP_THRESHOLD: f64 = 0.3;
 /// Default of [`VpmParams::light_strata`].
 pub const DEFAULT_LIGHT_STRATA: u32 = 3;
 
@@ -70,6 +72,12 @@ pub struct VpmParams {
     /// hit left the lit checker with 30 % per-sample noise at fixed pixel positions
     /// (`fig3_noise_budget`), most of the camera pass's noise.
     pub light_strata: u32,
+    /// Transmittance from the eye below which a march step queries the volume photon map only
+    /// with probability T / `map_threshold` (weighted by its inverse: unbiased), the steps
+    /// chosen by systematic sampling along the ray with one uniform offset, so the number of
+    /// queries per ray hardly varies. 0 queries at every step. The map estimates of nearby
+    /// steps share most of their photons, so this trades little noise for fewer k-NN queries.
+    pub map_threshold: f64,
 }
 
 impl Default for VpmParams {
@@ -82,6 +90,7 @@ impl Default for VpmParams {
             max_depth: 64,
             clip_boundary: false,
             light_strata: DEFAULT_LIGHT_STRATA,
+            map_threshold: DEFAULT_MAP_THRESHOLD,
         }
     }
 }
@@ -309,6 +318,9 @@ impl<'a> Vpm<'a> {
         let map = &self.maps.volume[medium as usize];
         let wo = -ray.d;
         let jitter = rng.uniform();
+        // systematic sampling of the steps that query the map: step i is chosen when
+        // (acc, acc + p_i] holds an integer, acc starting uniform in [0, 1): probability p_i
+        let mut acc = rng.uniform();
         let mut weight = 1.0; // Russian-roulette weight of the march's tail
         let mut sum = 0.0;
         let mut i = 0u64;
@@ -339,7 +351,15 @@ impl<'a> Vpm<'a> {
                     }
                 }
             }
-            if !map.is_empty() {
+            let tw = (-sigma_t * s).exp() * weight;
+            let p_map = if self.params.map_threshold > 0.0 {
+                (tw / self.params.map_threshold).min(1.0)
+            } else {
+                1.0
+            };
+            let chosen = p_map >= 1.0 || (acc + p_map).floor() > acc.floor();
+            acc += p_map;
+            if !map.is_empty() && chosen {
                 // the nearer of the entry and exit planes clips the gathering sphere
                 let plane = planes
                     .iter()
@@ -362,9 +382,9 @@ impl<'a> Vpm<'a> {
                 };
                 sc.radius_sum += e.radius;
                 sc.estimates += 1;
-                src += e.value;
+                src += e.value / p_map;
             }
-            sum += (-sigma_t * s).exp() * weight * src * dx;
+            sum += tw * src * dx;
         }
         sum
     }
