@@ -10,9 +10,11 @@ from dentalux.slab import Layer, simulate
 
 
 def demo_command(photons: int = typer.Option(1_000_000, help="photons")) -> None:
-    """What a spectrophotometer would measure on the 0.5 mm Table 1 disc at 540 nm, with the
-    coefficients fitted from the disc's measured TT and TR (materials: biomaterial-table1);
-    Table 1 measured TT 0.6016, TR 0.3243 at 540 nm."""
+    """Slab simulation of the paper's Table 1 disc (0.5 mm) at 540 nm.
+
+    Uses the coefficients fitted from the disc's measured TT and TR (material
+    biomaterial-table1); Table 1 measured TT 0.6016, TR 0.3243 at 540 nm.
+    """
     v = materials.get("biomaterial-table1").at(540.0)
     layer = Layer(mua=v.mua, mus=v.mus, g=v.g, n=v.n, thickness=0.5, fd=v.fd)
     print(f"biomaterial-table1 at 540 nm: mua {v.mua:.4f} /mm, mus {v.mus:.3f} /mm, "
