@@ -443,6 +443,60 @@ impl PhotonMap {
         e
     }
 
+    /// [`Self::volume_radiance`] near a boundary by a local linear fit along its normal: the
+    /// photons live in the part of the sphere behind the plane (point, unit outward normal),
+    /// and the density there is fitted as ρ(z) = ρ₀ + γ z, z the offset along the normal from
+    /// `x`, from the zeroth and first moments Σ w and Σ w z of the phase-weighted photons
+    /// against the clipped sphere's ∫ dV, ∫ z dV, ∫ z² dV; the value at `x` is ρ₀ (clamped at
+    /// 0). Unlike [`Self::volume_radiance_clipped`] this also removes the first-order error of
+    /// a density that changes with depth; it equals the plain estimate where the sphere does
+    /// not reach the plane. Consistent (exact for a linear density, error O(r²)).
+    #[allow(clippy::too_many_arguments)]
+    pub fn volume_radiance_fitted(
+        &self,
+        x: Vec3,
+        wo: Vec3,
+        phase: &PhaseFunction,
+        k: usize,
+        r_max: f64,
+        plane: Option<(Vec3, Vec3)>,
+        nb: &mut Neighbours,
+    ) -> Estimate {
+        let e = self.volume_radiance(x, wo, phase, k, r_max, nb);
+        let Some((p0, n)) = plane else {
+            return e;
+        };
+        let r = e.radius;
+        let h = (p0 - x).dot(n).max(0.0);
+        if e.count == 0 || h >= r || r <= 0.0 {
+            return e;
+        }
+        // moments of the ball |y| ≤ r cut to z ≤ h: ∫ z^m π (r² − z²) dz over [−r, h]
+        let moment = |m: i32| {
+            let f = |z: f64| {
+                PI * (r * r * z.powi(m + 1) / (m + 1) as f64 - z.powi(m + 3) / (m + 3) as f64)
+            };
+            f(h) - f(-r)
+        };
+        let (v, m1, m2) = (moment(0), moment(1), moment(2));
+        let (mut s0, mut s1) = (0.0, 0.0);
+        for &(_, i) in nb.items() {
+            let p = &self.photons[i as usize];
+            let w = phase.eval(p.direction().dot(wo)) * p.power as f64;
+            s0 += w;
+            s1 += w * (p.position() - x).dot(n);
+        }
+        let det = v * m2 - m1 * m1;
+        if det <= 0.0 {
+            return e;
+        }
+        let unbias = knn_radius(nb, k, r_max).1;
+        Estimate {
+            value: (unbias * (s0 * m2 - s1 * m1) / det).max(0.0),
+            ..e
+        }
+    }
+
     /// Same as [`Self::volume_radiance`] with a fixed radius `r` [mm] (progressive photon
     /// mapping): Σ_{|x_p − x| ≤ r} p(d_p · wo) ΔΦ_p / (4/3 π r³).
     pub fn volume_radiance_radius(
@@ -702,6 +756,65 @@ mod tests {
         assert!(
             raw < 0.7 * expect,
             "unclipped estimate {raw} should be about half of {expect}"
+        );
+    }
+
+    #[test]
+    fn fitted_estimate_follows_a_density_that_rises_with_depth() {
+        // photons in z < 0 with density ∝ 1 + 0.3 |z| (z ∈ [−10, 0], 10 mm square): near the
+        // plane z = 0 the plain estimate is about half, the clipped one too high (the denser
+        // photons below), the fitted one right
+        let n = 400_000;
+        let mut s = Stream::new(23, 0, 0);
+        // inverse CDF of 1 + a t on [0, 10]: F(t) = (t + a t²/2) / (10 + 50 a)
+        let a = 0.3;
+        let norm = 10.0 + 50.0 * a;
+        let raw: Vec<Photon> = (0..n)
+            .map(|_| {
+                let c = s.uniform() * norm;
+                let t = ((1.0 + 2.0 * a * c).sqrt() - 1.0) / a;
+                let p = Vec3::new(s.uniform() * 10.0, s.uniform() * 10.0, -t);
+                Photon::new(p, uniform_sphere(s.uniform2()), 1.0 / n as f64)
+            })
+            .collect();
+        let map = PhotonMap::build(raw);
+        let depth = 0.05;
+        // photons per mm³ at depth d: n (1 + a d) / (100 norm), each of power 1/n
+        let expect = (1.0 + a * depth) / (100.0 * norm) / (4.0 * PI);
+        let iso = PhaseFunction::Isotropic;
+        let plane = Some((Vec3::ZERO, Vec3::Z));
+        let mut nb = Neighbours::new();
+        let (mut fit, mut clip, mut plain) = (Vec::new(), 0.0, 0.0);
+        for i in 0..4 {
+            for j in 0..4 {
+                let x = Vec3::new(1.6 + 2.2 * i as f64, 1.6 + 2.2 * j as f64, -depth);
+                let k = 400;
+                fit.push(
+                    map.volume_radiance_fitted(x, Vec3::Z, &iso, k, 5.0, plane, &mut nb)
+                        .value,
+                );
+                clip += map
+                    .volume_radiance_clipped(x, Vec3::Z, &iso, k, 5.0, plane, &mut nb)
+                    .value;
+                plain += map.volume_radiance(x, Vec3::Z, &iso, k, 5.0, &mut nb).value;
+            }
+        }
+        let m = fit.iter().sum::<f64>() / 16.0;
+        let sd = (fit.iter().map(|v| (v - m).powi(2)).sum::<f64>() / 15.0).sqrt();
+        let se = sd / 4.0;
+        assert!(
+            (m - expect).abs() < 4.0 * se,
+            "fitted {m} ± {se} vs {expect}"
+        );
+        assert!(
+            plain / 16.0 < 0.7 * expect,
+            "plain {} vs {expect}",
+            plain / 16.0
+        );
+        assert!(
+            clip / 16.0 > expect + 4.0 * se,
+            "clipped {} vs {expect}",
+            clip / 16.0
         );
     }
 

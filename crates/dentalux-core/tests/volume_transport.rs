@@ -88,13 +88,24 @@ fn vpm_image_clip(
     seed: u64,
     clip_boundary: bool,
 ) -> Vec<f64> {
-    let control = Control::new();
-    let maps = trace_photons(scene, photons, mode, seed, 0, &control).unwrap();
     let params = VpmParams {
-        mode,
         clip_boundary,
         ..VpmParams::default()
     };
+    vpm_image_params(scene, photons, mode, spp, seed, params)
+}
+
+fn vpm_image_params(
+    scene: &Scene,
+    photons: u64,
+    mode: StoreMode,
+    spp: usize,
+    seed: u64,
+    params: VpmParams,
+) -> Vec<f64> {
+    let control = Control::new();
+    let maps = trace_photons(scene, photons, mode, seed, 0, &control).unwrap();
+    let params = VpmParams { mode, ..params };
     let vpm = Vpm::new(scene, &maps, params);
     render(scene, spp, seed + 1, |r, rng| {
         let mut sc = Scratch::default();
@@ -527,10 +538,15 @@ fn clip_experiment() {
     scene.surfaces[0] = Surface::Black;
     let (reference, var) = render(&scene, 8192, 61, |r, rng| volpath::radiance(&scene, r, rng));
     for photons in [400_000u64, 3_200_000] {
-        for clip in [false, true] {
-            let img = vpm_image_clip(&scene, photons, StoreMode::All, 64, 63, clip);
+        for (clip, fit) in [(false, false), (true, false), (false, true)] {
+            let params = VpmParams {
+                clip_boundary: clip,
+                boundary_fit: fit,
+                ..VpmParams::default()
+            };
+            let img = vpm_image_params(&scene, photons, StoreMode::All, 64, 63, params);
             compare(
-                &format!("black floor {photons} clip {clip}"),
+                &format!("black floor {photons} clip {clip} fit {fit}"),
                 &img,
                 &reference,
                 &var,

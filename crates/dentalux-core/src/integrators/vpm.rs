@@ -83,6 +83,10 @@ pub struct VpmParams {
     /// queries per ray hardly varies. 0 queries at every step. The map estimates of nearby
     /// steps share most of their photons, so this trades little noise for fewer k-NN queries.
     pub map_threshold: f64,
+    /// Near a boundary, fit the density linearly along the nearer boundary plane's normal
+    /// (`PhotonMap::volume_radiance_fitted`) instead of dividing by the whole sphere (off by
+    /// default; see docs/vpm-convergence.md). Takes precedence over `clip_boundary`.
+    pub boundary_fit: bool,
 }
 
 impl Default for VpmParams {
@@ -96,6 +100,7 @@ impl Default for VpmParams {
             clip_boundary: false,
             light_strata: DEFAULT_LIGHT_STRATA,
             map_threshold: DEFAULT_MAP_THRESHOLD,
+            boundary_fit: false,
         }
     }
 }
@@ -368,7 +373,7 @@ impl<'a> Vpm<'a> {
                 // the nearer of the entry and exit planes clips the gathering sphere
                 let plane = planes
                     .iter()
-                    .filter(|_| self.params.clip_boundary)
+                    .filter(|_| self.params.clip_boundary || self.params.boundary_fit)
                     .flatten()
                     .min_by(|a, b| {
                         (a.0 - x)
@@ -380,8 +385,12 @@ impl<'a> Vpm<'a> {
                 let (k, r) = (self.params.k, setup.radius);
                 let e = if self.fixed_radius {
                     let mut e = map.volume_radiance_radius(x, wo, &m.phase, r);
-                    e.value *= clip_factor(x, r, plane);
+                    if self.params.clip_boundary {
+                        e.value *= clip_factor(x, r, plane);
+                    }
                     e
+                } else if self.params.boundary_fit {
+                    map.volume_radiance_fitted(x, wo, &m.phase, k, r, plane, &mut sc.nb)
                 } else {
                     map.volume_radiance_clipped(x, wo, &m.phase, k, r, plane, &mut sc.nb)
                 };
