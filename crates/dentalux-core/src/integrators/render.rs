@@ -18,6 +18,7 @@ use crate::film::{Film, Tile, TILE};
 use crate::geometry::Ray;
 use crate::photon_map::Neighbours;
 use crate::rng::Stream;
+use crate::sampling::r2_point;
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -214,7 +215,8 @@ impl Totals {
 }
 
 /// Render the film tile by tile: `radiance(ray, rng, scratch)` is called `spp` times per
-/// pixel with jittered camera rays and averaged. Returns the image and the summed counters.
+/// pixel with camera rays through randomly rotated R2 sub-pixel positions (stratified,
+/// each unbiased) and averaged. Returns the image and the summed counters.
 pub fn render_tiles<F>(
     scene: &Scene,
     settings: &Settings,
@@ -240,8 +242,10 @@ where
                 control.check()?;
                 for x in tile.x0..tile.x1 {
                     let mut sum = 0.0;
-                    for _ in 0..spp {
-                        let [jx, jy] = rng.uniform2();
+                    // stratified sub-pixel positions: R2 points with a random rotation
+                    let shift = rng.uniform2();
+                    for i in 0..spp {
+                        let [jx, jy] = r2_point(i, shift);
                         let ray = cam.ray(x as f64 + jx, y as f64 + jy);
                         sum += radiance(&ray, &mut rng, &mut scratch);
                     }
