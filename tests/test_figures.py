@@ -13,7 +13,7 @@ from dentalux.figures import (
     transmittance_d65,
 )
 
-TINY = Quality("tiny", (24, 18), 1, 2_000, 20_000, 0.5, (12, 9), 4, 16)
+TINY = Quality("tiny", (24, 18), 1, 2_000, 20_000, 0.5, (12, 9), 4, 16, 0.5, 20_000, 1.0, 1)
 
 
 def test_enamel_scale_matches_the_biomaterial_transmittance():
