@@ -65,10 +65,10 @@ class Quality:
 
 QUALITIES = {
     # a few minutes for everything on a 2-core machine (what `make demo` runs)
-    "preview": Quality("preview", (320, 240), 4, 1_000_000, 4_000_000, 0.3, (96, 72), 64, 800,
+    "preview": Quality("preview", (320, 240), 4, 1_000_000, 4_000_000, 0.3, (96, 72), 8192, 800,
                        0.3, 16_000_000, 1.0, 8),
     # the paper's photon counts: 100 M volume photons, 1 M global photons
-    "paper": Quality("paper", (512, 384), 16, 1_000_000, 100_000_000, 0.15, (192, 144), 1024,
+    "paper": Quality("paper", (512, 384), 16, 1_000_000, 100_000_000, 0.15, (192, 144), 16384,
                      800, 0.15, 100_000_000, 0.5, 16),
 }
 
