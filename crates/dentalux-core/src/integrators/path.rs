@@ -118,14 +118,7 @@ pub fn radiance(
         match scene.boundary(hit.shape) {
             Boundary::Dielectric { inside, outside } => {
                 let c = cross(scene, &hit, ray.d, inside, outside);
-                let d = match c.refracted {
-                    Some(t) if rng.uniform() >= c.reflectance => {
-                        beta *= (c.eta_i / c.eta_t).powi(2);
-                        medium = c.to;
-                        t
-                    }
-                    _ => c.reflected,
-                };
+                let d = c.choose(rng, &mut beta, &mut medium);
                 if c.mismatched() {
                     count_emission = true;
                 }

@@ -329,3 +329,50 @@ pub fn trace_photons_with(
         build_seconds: t1.elapsed().as_secs_f64(),
     })
 }
+
+/// The maps a camera pass needs: `settings.volume_photons` photons filling the volume maps
+/// (stream tag `tag`) and, from independent streams (`SURFACE_PASS | tag`), `settings.photons`
+/// more filling the surface map. Used by `vpm`/`vpm-full` (tag 0) and by each `ppm` pass.
+pub fn trace_camera_maps(
+    scene: &Scene,
+    settings: &crate::integrators::render::Settings,
+    mode: StoreMode,
+    tag: u64,
+    control: &Control,
+) -> Result<PhotonMaps> {
+    let (seed, band) = (settings.seed, settings.band);
+    let vol_only = Targets {
+        volume: true,
+        surface: false,
+    };
+    let surf_only = Targets {
+        volume: false,
+        surface: true,
+    };
+    let mut maps = trace_photons_with(
+        scene,
+        settings.volume_photons,
+        mode,
+        vol_only,
+        tag,
+        seed,
+        band,
+        control,
+    )?;
+    let surf = trace_photons_with(
+        scene,
+        settings.photons,
+        mode,
+        surf_only,
+        SURFACE_PASS | tag,
+        seed,
+        band,
+        control,
+    )?;
+    maps.surface = surf.surface;
+    // the volume-only trace stores nothing on surfaces: its ledger's surface entry is 0
+    maps.ledger.stored_surface = surf.ledger.stored_surface;
+    maps.trace_seconds += surf.trace_seconds;
+    maps.build_seconds += surf.build_seconds;
+    Ok(maps)
+}

@@ -17,7 +17,7 @@
 use crate::control::Control;
 use crate::error::{Error, Result};
 use crate::integrators::photon_trace::PhotonMaps;
-use crate::integrators::photon_trace::{trace_photons_with, StoreMode, Targets, SURFACE_PASS};
+use crate::integrators::photon_trace::{trace_camera_maps, StoreMode};
 use crate::integrators::render::{render_tiles, Settings, Stats};
 use crate::integrators::vpm::{default_radius, Vpm, VpmParams};
 use crate::photon_map::PHOTON_BYTES;
@@ -51,40 +51,13 @@ fn trace_pass(
     control: &Control,
     pass: u32,
 ) -> Result<PhotonMaps> {
-    let tag = (pass as u64) << 32;
-    let (seed, band) = (settings.seed, settings.band);
-    let vol_only = Targets {
-        volume: true,
-        surface: false,
-    };
-    let surf_only = Targets {
-        volume: false,
-        surface: true,
-    };
-    let mut maps = trace_photons_with(
+    trace_camera_maps(
         scene,
-        settings.volume_photons,
+        settings,
         StoreMode::All,
-        vol_only,
-        tag,
-        seed,
-        band,
+        (pass as u64) << 32,
         control,
-    )?;
-    let surf = trace_photons_with(
-        scene,
-        settings.photons,
-        StoreMode::All,
-        surf_only,
-        SURFACE_PASS | tag,
-        seed,
-        band,
-        control,
-    )?;
-    maps.surface = surf.surface;
-    maps.trace_seconds += surf.trace_seconds;
-    maps.build_seconds += surf.build_seconds;
-    Ok(maps)
+    )
 }
 
 /// The estimator of one pass's maps, before its radii are set.

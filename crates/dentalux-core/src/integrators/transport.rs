@@ -11,6 +11,7 @@
 
 use crate::fresnel;
 use crate::geometry::{offset_origin, Hit, Ray, Vec3};
+use crate::rng::Stream;
 use crate::scene::{Boundary, Scene};
 
 /// Most boundary crossings a shadow ray follows before giving up (a guard, not physics:
@@ -41,6 +42,21 @@ impl Crossing {
     #[inline]
     pub fn mismatched(&self) -> bool {
         self.eta_i != self.eta_t
+    }
+
+    /// Fresnel roulette for one path: refract with probability 1 − R (radiance scaled by
+    /// (η_i/η_t)², the path's medium switched to `to`), else reflect. Draws a uniform only
+    /// when refraction is possible. Returns the new travel direction.
+    #[inline]
+    pub fn choose(&self, rng: &mut Stream, beta: &mut f64, medium: &mut u32) -> Vec3 {
+        match self.refracted {
+            Some(t) if rng.uniform() >= self.reflectance => {
+                *beta *= (self.eta_i / self.eta_t).powi(2);
+                *medium = self.to;
+                t
+            }
+            _ => self.reflected,
+        }
     }
 }
 

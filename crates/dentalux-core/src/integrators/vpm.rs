@@ -28,7 +28,7 @@
 use crate::control::Control;
 use crate::error::Result;
 use crate::geometry::{Hit, Ray, Vec3};
-use crate::integrators::photon_trace::{trace_photons_with, Targets, SURFACE_PASS};
+use crate::integrators::photon_trace::trace_camera_maps;
 use crate::integrators::photon_trace::{PhotonMaps, StoreMode};
 use crate::integrators::render::{render_tiles, Scratch, Settings, Stats};
 use crate::integrators::transport::{cross, eq13_transmittance, spawn, straight_transmittance};
@@ -477,38 +477,7 @@ pub fn render(
     } else {
         StoreMode::Paper
     };
-    let (s, b) = (settings.seed, settings.band);
-    let vol_only = Targets {
-        volume: true,
-        surface: false,
-    };
-    let surf_only = Targets {
-        volume: false,
-        surface: true,
-    };
-    let mut maps = trace_photons_with(
-        scene,
-        settings.volume_photons,
-        mode,
-        vol_only,
-        0,
-        s,
-        b,
-        control,
-    )?;
-    let surf = trace_photons_with(
-        scene,
-        settings.photons,
-        mode,
-        surf_only,
-        SURFACE_PASS,
-        s,
-        b,
-        control,
-    )?;
-    maps.surface = surf.surface;
-    maps.trace_seconds += surf.trace_seconds;
-    maps.build_seconds += surf.build_seconds;
+    let maps = trace_camera_maps(scene, settings, mode, 0, control)?;
     let params = VpmParams {
         k: settings.k,
         radius: settings.radius,
@@ -532,7 +501,7 @@ pub fn render(
             "stored_volume_power".into(),
             maps.ledger.stored_volume.iter().sum(),
         ),
-        ("stored_surface_power".into(), surf.ledger.stored_surface),
+        ("stored_surface_power".into(), maps.ledger.stored_surface),
     ];
     for (i, m) in vpm.media.iter().enumerate() {
         if scene.media[i].sigma_s > 0.0 {
