@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -42,13 +43,18 @@ def main() -> None:
                                  check=True, capture_output=True, text=True)
             rows[fig] = json.loads(out.stdout.strip().splitlines()[-1])
             rows[fig]["wall_seconds_with_startup"] = time.perf_counter() - t0
+            rows[fig]["load_average_1min_at_end"] = os.getloadavg()[0]
+            rows[fig]["date_utc"] = time.strftime("%Y-%m-%d %H:%M", time.gmtime())
             print(f"{fig:8s} {rows[fig]['seconds']:8.1f} s   peak "
                   f"{rows[fig]['peak_rss_bytes'] / 2**20:7.0f} MiB", flush=True)
+    # merge into earlier runs of other figures (paper quality is timed one figure at a time)
+    path = Path(__file__).with_name(f"figures-{args.quality}.json")
+    if path.exists():
+        rows = {**json.loads(path.read_text())["figures"], **rows}
     total = sum(r["seconds"] for r in rows.values())
-    print(f"total    {total:8.1f} s   ({args.quality})")
-    Path(__file__).with_name(f"figures-{args.quality}.json").write_text(
-        json.dumps({"quality": args.quality, "figures": rows, "total_seconds": total},
-                   indent=2))
+    print(f"total    {total:8.1f} s   ({args.quality}, all figures on record)")
+    path.write_text(json.dumps({"quality": args.quality, "figures": rows,
+                                "total_seconds": total}, indent=2))
 
 
 if __name__ == "__main__":
