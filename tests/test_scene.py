@@ -130,7 +130,7 @@ class FakeCore:
         check_contract(scene)
         assert set(settings) == {"integrator", "spp", "photons", "volume_photons", "k",
                                  "radius", "step", "seed", "band", "threads", "max_depth",
-                                 "passes", "alpha", "final_gather"}
+                                 "passes", "alpha", "final_gather", "kernel_layer"}
         self.calls.append((scene, settings))
         if progress is not None:
             progress(1)
@@ -546,7 +546,7 @@ def test_render_api_with_fake_core(fake_core):
     assert settings0 == {"integrator": "pm", "spp": 2, "photons": 100, "volume_photons": 5,
                          "k": 8, "radius": 1.5, "step": None, "seed": 7, "band": 605,
                          "threads": None, "max_depth": 64, "passes": 1, "alpha": 0.7,
-                         "final_gather": False}
+                         "final_gather": False, "kernel_layer": 0.3}
     # red wall at 605 nm from its reflectance table
     assert scene0["surfaces"][1]["reflectance"] == pytest.approx(np.interp(
         605, [400, 550, 580, 600, 700], [0.05, 0.05, 0.2, 0.6, 0.65]))
@@ -564,6 +564,8 @@ def test_render_api_bad_arguments(fake_core):
         dentalux.render(d, integrator="vmp")
     with pytest.raises(ValueError, match=r"spp = 0: out of range"):
         dentalux.render(d, spp=0)
+    with pytest.raises(ValueError, match=r"kernel_layer = 1.5: out of range"):
+        dentalux.render(d, kernel_layer=1.5)
     with pytest.raises(ValueError, match=r"bands\[0\] = 100: out of range"):
         dentalux.render(d, bands=[100])
     with pytest.raises(ValueError, match=r"bands must be distinct"):

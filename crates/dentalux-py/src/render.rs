@@ -579,6 +579,7 @@ fn settings_from_json(text: &str) -> R<(Settings, Option<usize>)> {
             Some((v, p)) => Node { v, path: &p }.boolean()?,
             None => d.final_gather,
         },
+        kernel_layer: o.num_or("kernel_layer", d.kernel_layer)?,
     };
     let threads = match o.opt("threads") {
         Some((v, p)) => Some(Node { v, path: &p }.uint()? as usize),

@@ -70,6 +70,10 @@ def render_command(
         help="progressive: stop when the estimated relative error (spread of the per-pass "
              "images) falls to X, e.g. 0.02"),
     alpha: float = typer.Option(None, help="ppm radius reduction alpha in (0, 1)"),
+    kernel_layer: float = typer.Option(
+        None, "--kernel-layer",
+        help="half-height of the boundary-aligned density kernel over the gathering radius, "
+             "in [0, 1]; 0 = the paper's sphere (default 0.3)"),
     cluster: str = typer.Option(
         None, help="run the band x pass tasks on Dask: local:N (LocalCluster of N workers) "
                    "or tcp://HOST:PORT (a running scheduler)"),
@@ -80,7 +84,8 @@ def render_command(
     scene = load_scene(scene_file)
     band_list = parse_bands(bands)
     options = {k_: v for k_, v in (("volume_photons", volume_photons), ("k", k),
-                                   ("radius", radius), ("step", step), ("alpha", alpha))
+                                   ("radius", radius), ("step", step), ("alpha", alpha),
+                                   ("kernel_layer", kernel_layer))
                if v is not None}
     common = dict(integrator=integrator, spp=spp, photons=photons, bands=band_list,
                   seed=seed, threads=threads, resolution=parse_resolution(resolution),

@@ -46,6 +46,7 @@ RENDER_KEYS = {
     "passes": 1,
     "alpha": 0.7,
     "final_gather": False,
+    "kernel_layer": 0.3,
 }
 
 INTEGRATORS = ("pm", "path", "vpm", "vpm-full", "volpath", "ppm")
@@ -619,6 +620,8 @@ def validate_settings(d: dict, path: str = "settings") -> dict:
                               hi_open=True)
     if "final_gather" in out:
         out["final_gather"] = boolean(out["final_gather"], p("final_gather"))
+    if "kernel_layer" in out:
+        out["kernel_layer"] = number(out["kernel_layer"], p("kernel_layer"), lo=0.0, hi=1.0)
     if out.get("threads") is not None:
         out["threads"] = integer(out["threads"], p("threads"), lo=1)
     return out

@@ -193,15 +193,18 @@ fn trace_batch(
                 let s = sample_exponential(rng.uniform_open0(), sigma_t);
                 if s < t_hit {
                     let x = ray.at(s);
-                    let single_traced = !scattered && !reflected;
-                    if targets.volume && (mode == StoreMode::All || !single_traced) {
-                        out.volume[medium as usize].push(Photon::new(x, ray.d, power));
-                        led.stored_volume[medium as usize] += power;
-                    }
                     // scatter or absorb, eqs. 3–4
                     if rng.uniform() >= m.albedo() {
                         led.absorbed_medium[medium as usize] += power;
                         break;
+                    }
+                    // only scattering events are stored: their density is σs φ, what eq. 11's
+                    // Σ p ΔΦ / V estimates (storing absorptions too would give σt φ, 1/albedo
+                    // too bright)
+                    let single_traced = !scattered && !reflected;
+                    if targets.volume && (mode == StoreMode::All || !single_traced) {
+                        out.volume[medium as usize].push(Photon::new(x, ray.d, power));
+                        led.stored_volume[medium as usize] += power;
                     }
                     // new direction from the phase function, eqs. 7–10
                     let d = m.phase.sample(ray.d, rng.uniform2(), rng.uniform());

@@ -19,7 +19,7 @@ use crate::error::{Error, Result};
 use crate::integrators::photon_trace::PhotonMaps;
 use crate::integrators::photon_trace::{trace_camera_maps, StoreMode};
 use crate::integrators::render::{render_tiles, Settings, Stats};
-use crate::integrators::vpm::{default_radius, Vpm, VpmParams};
+use crate::integrators::vpm::{default_volume_radius, Vpm, VpmParams};
 use crate::photon_map::PHOTON_BYTES;
 use crate::scene::Scene;
 use std::time::Instant;
@@ -68,6 +68,7 @@ fn pass_estimator<'a>(scene: &'a Scene, settings: &Settings, maps: &'a PhotonMap
         step: settings.step,
         mode: StoreMode::All,
         max_depth: settings.max_depth,
+        layer: settings.kernel_layer,
         ..VpmParams::default()
     };
     Vpm::new(scene, maps, params)
@@ -85,7 +86,7 @@ fn first_radii(
         .map(|i| {
             settings
                 .radius
-                .unwrap_or(0.5 * default_radius(&maps.volume[i], settings.k, false))
+                .unwrap_or(0.5 * default_volume_radius(scene, &maps.volume[i], settings.k))
         })
         .collect();
     (vol, settings.radius.unwrap_or(0.5 * vpm.surface_radius))

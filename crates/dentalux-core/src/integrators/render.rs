@@ -6,8 +6,8 @@
 //! `Stream::new(seed, band, i)` (photon batches use indices tagged with
 //! [`crate::integrators::photon_trace::PHOTON_STREAM`], so the streams never meet). Tiles run
 //! in parallel (rayon) and are written in index order, so an image does not depend on the
-//! number of threads. The control is checked before each tile row, so a cancel stops a
-//! render within one row of 16 pixels per thread.
+//! number of threads. The control is checked before each tile row and every 256 samples of a
+//! pixel, so a cancel stops a render within one tile row (or 256 samples) per thread.
 //!
 //! Progress (`control.done()`) counts photons traced plus pixels finished: a progress bar's
 //! total is `photons` (0 for `path`) + width × height.
@@ -92,6 +92,9 @@ pub struct Settings {
     pub pass_index: u32,
     /// `pm`: final gathering (one diffuse bounce before the density estimate).
     pub final_gather: bool,
+    /// `vpm`, `vpm-full`, `ppm`: half-height of the boundary-aligned layer kernel over the
+    /// gathering radius, in [0, 1]; 0 the sphere (see `VpmParams::layer`).
+    pub kernel_layer: f64,
 }
 
 impl Default for Settings {
@@ -111,6 +114,7 @@ impl Default for Settings {
             alpha: 0.7,
             pass_index: 0,
             final_gather: false,
+            kernel_layer: crate::integrators::vpm::DEFAULT_LAYER,
         }
     }
 }
@@ -144,7 +148,16 @@ impl Settings {
                 )?;
             }
         }
-        crate::error::check_range("settings.alpha", self.alpha, 0.0, true, 1.0, true, "")
+        crate::error::check_range("settings.alpha", self.alpha, 0.0, true, 1.0, true, "")?;
+        crate::error::check_range(
+            "settings.kernel_layer",
+            self.kernel_layer,
+            0.0,
+            false,
+            1.0,
+            false,
+            "",
+        )
     }
 }
 
@@ -245,6 +258,10 @@ where
                     // stratified sub-pixel positions: R2 points with a random rotation
                     let shift = rng.uniform2();
                     for i in 0..spp {
+                        // very high spp: check within a pixel too (an atomic load)
+                        if i % 256 == 255 {
+                            control.check()?;
+                        }
                         let [jx, jy] = r2_point(i, shift);
                         let ray = cam.ray(x as f64 + jx, y as f64 + jy);
                         sum += radiance(&ray, &mut rng, &mut scratch);

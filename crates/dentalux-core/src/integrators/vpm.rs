@@ -33,7 +33,7 @@ use crate::integrators::photon_trace::{PhotonMaps, StoreMode};
 use crate::integrators::render::{render_tiles, Scratch, Settings, Stats};
 use crate::integrators::transport::{cross, eq13_transmittance, spawn, straight_transmittance};
 use crate::lights::Light;
-use crate::photon_map::{clip_factor, PhotonMap, PHOTON_BYTES};
+use crate::photon_map::{PhotonMap, Planes, PHOTON_BYTES};
 use crate::rng::Stream;
 use crate::scene::{Boundary, Scene};
 use std::f64::consts::PI;
@@ -49,6 +49,9 @@ const MIN_STEP_FRACTION: f64 = 1e-5;
 const RR_WEIGHT: f64 = 0.05;
 /// Default of [`VpmParams::map_threshold`].
 pub const DEFAULT_MAP_THRESHOLD: f64 = 0.3;
+/// Default of [`VpmParams::layer`]: the layer kernel's half-height over the gathering radius
+/// (0.2 and 0.5 measured the same on the slab; docs/vpm-convergence.md).
+pub const DEFAULT_LAYER: f64 = 0.3;
 /// Default of [`VpmParams::light_strata`].
 pub const DEFAULT_LIGHT_STRATA: u32 = 3;
 
@@ -65,12 +68,6 @@ pub struct VpmParams {
     pub mode: StoreMode,
     /// Guard on camera-path length (boundary events); roulette ends paths long before.
     pub max_depth: u32,
-    /// Clip the gathering sphere by the nearer boundary plane (off by default). Measured on
-    /// the disc scene against `volpath`: it removes the darkening near surfaces at low photon
-    /// counts but over-corrects (+7 % at 3.2 M photons, black floor) because the photon density
-    /// rises with depth below an escaping boundary, so the half-sphere samples denser photons;
-    /// the plain estimate (−1.8 % there) converges as the radius shrinks.
-    pub clip_boundary: bool,
     /// Direct light at an opaque surface: an area light is sampled `light_strata`² times, once
     /// in each cell of a `light_strata` × `light_strata` grid over its sample square
     /// (stratified, unbiased); point and spot lights once. On the Fig. 3 scene one sample per
@@ -83,10 +80,14 @@ pub struct VpmParams {
     /// queries per ray hardly varies. 0 queries at every step. The map estimates of nearby
     /// steps share most of their photons, so this trades little noise for fewer k-NN queries.
     pub map_threshold: f64,
-    /// Near a boundary, fit the density linearly along the nearer boundary plane's normal
-    /// (`PhotonMap::volume_radiance_fitted`) instead of dividing by the whole sphere (off by
-    /// default; see docs/vpm-convergence.md). Takes precedence over `clip_boundary`.
-    pub boundary_fit: bool,
+    /// Shape of the density-estimation kernel in media: 0 a sphere (the paper's); otherwise
+    /// a flat cylinder along the nearer of the camera ray's entry and exit planes, half-height
+    /// `layer` × the gathering radius, fitted linearly in depth where the plane cuts it
+    /// (`PhotonMap::volume_radiance_layer`). Default [`DEFAULT_LAYER`]: the sphere is up to
+    /// half too dark within its radius of a boundary, where a camera looking into a dense
+    /// medium gets most of its light (−8.4 % vs the slab simulator on a slab at 4 M photons;
+    /// the layer kernel −0.1 %).
+    pub layer: f64,
 }
 
 impl Default for VpmParams {
@@ -97,10 +98,9 @@ impl Default for VpmParams {
             step: None,
             mode: StoreMode::Paper,
             max_depth: 64,
-            clip_boundary: false,
             light_strata: DEFAULT_LIGHT_STRATA,
             map_threshold: DEFAULT_MAP_THRESHOLD,
-            boundary_fit: false,
+            layer: DEFAULT_LAYER,
         }
     }
 }
@@ -155,6 +155,53 @@ pub(crate) fn default_radius(map: &PhotonMap, k: usize, flat: bool) -> f64 {
     (2.0 * r).max(1e-6)
 }
 
+/// Typical half-thickness of the region a volume map's photons live in [mm]: for up to 256
+/// photons spread through the map, the shortest chord through the point along 7 lines (the
+/// axes and the body diagonals) to the surrounding boundaries, halved; the median over the
+/// photons. A 0.5 mm disc gives about 0.25 mm, a 1 mm enamel shell about 0.5 mm.
+pub(crate) fn half_thickness(scene: &Scene, map: &PhotonMap) -> Option<f64> {
+    const LINES: [[f64; 3]; 7] = [
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 1.0, 1.0],
+        [1.0, 1.0, -1.0],
+        [1.0, -1.0, 1.0],
+        [-1.0, 1.0, 1.0],
+    ];
+    let photons = map.photons();
+    let stride = (photons.len() / 256).max(1);
+    let mut halves: Vec<f64> = photons
+        .iter()
+        .step_by(stride)
+        .filter_map(|p| {
+            let x = p.position();
+            LINES
+                .iter()
+                .filter_map(|l| {
+                    let d = Vec3::new(l[0], l[1], l[2]);
+                    let up = scene.intersect(&Ray::new(x, d), f64::INFINITY)?.t;
+                    let down = scene.intersect(&Ray::new(x, -d), f64::INFINITY)?.t;
+                    Some(0.5 * (up + down))
+                })
+                .min_by(f64::total_cmp)
+        })
+        .collect();
+    if halves.is_empty() {
+        return None;
+    }
+    let mid = halves.len() / 2;
+    Some(*halves.select_nth_unstable_by(mid, f64::total_cmp).1)
+}
+
+/// Default largest gathering radius of a medium's map [mm]: twice the mean-density radius,
+/// at most the medium's typical half-thickness, so that in a thin layer (a 0.5 mm disc, an
+/// enamel shell) the sphere does not reach across it and blur what lies behind.
+pub(crate) fn default_volume_radius(scene: &Scene, map: &PhotonMap, k: usize) -> f64 {
+    let r = default_radius(map, k, false);
+    half_thickness(scene, map).map_or(r, |h| r.min(h.max(1e-6)))
+}
+
 impl<'a> Vpm<'a> {
     /// Resolve the parameters for `scene` and `maps`.
     pub fn new(scene: &'a Scene, maps: &'a PhotonMaps, params: VpmParams) -> Self {
@@ -181,7 +228,7 @@ impl<'a> Vpm<'a> {
                 let radius = params.radius.unwrap_or_else(|| {
                     maps.volume
                         .get(i)
-                        .map_or(1.0, |map| default_radius(map, params.k, false))
+                        .map_or(1.0, |map| default_volume_radius(scene, map, params.k))
                 });
                 MediumSetup { step, radius }
             })
@@ -306,8 +353,8 @@ impl<'a> Vpm<'a> {
 
     /// ∫_0^t_end e^(−σt s) S(x(s)) ds along `ray` in `medium` by jittered steps (eq. 11):
     /// S = σs Σ_l L_l p (single scattering, `vpm` only) + Σ p ΔΦ / V, V the gathering sphere
-    /// 4/3 π r³ (with `clip_boundary`: less the cap cut off by the nearer of the boundary
-    /// planes where the ray entered and leaves the medium; `planes`: point, outward normal).
+    /// 4/3 π r³, or the layer kernel oriented by the nearer of the boundary planes where the
+    /// ray entered and leaves the medium (`planes`: point, outward normal).
     fn march(
         &self,
         ray: &Ray,
@@ -370,29 +417,28 @@ impl<'a> Vpm<'a> {
             let chosen = p_map >= 1.0 || (acc + p_map).floor() > acc.floor();
             acc += p_map;
             if !map.is_empty() && chosen {
-                // the nearer of the entry and exit planes clips the gathering sphere
-                let plane = planes
+                // the nearer of the entry and exit planes orients the layer kernel
+                let depth = |p: &(Vec3, Vec3)| (p.0 - x).dot(p.1).abs();
+                let near = planes
                     .iter()
-                    .filter(|_| self.params.clip_boundary || self.params.boundary_fit)
                     .flatten()
-                    .min_by(|a, b| {
-                        (a.0 - x)
-                            .dot(a.1)
-                            .abs()
-                            .total_cmp(&(b.0 - x).dot(b.1).abs())
-                    })
-                    .copied();
-                let (k, r) = (self.params.k, setup.radius);
-                let e = if self.fixed_radius {
-                    let mut e = map.volume_radiance_radius(x, wo, &m.phase, r);
-                    if self.params.clip_boundary {
-                        e.value *= clip_factor(x, r, plane);
+                    .min_by(|a, b| depth(a).total_cmp(&depth(b)))
+                    .copied()
+                    .filter(|_| self.params.layer > 0.0);
+                let planes = near.map(|near| Planes {
+                    near,
+                    far: planes.iter().flatten().find(|p| **p != near).copied(),
+                });
+                let (k, r, layer) = (self.params.k, setup.radius, self.params.layer);
+                let e = match (self.fixed_radius, planes) {
+                    (true, Some(pl)) => {
+                        map.volume_radiance_layer_radius(x, wo, &m.phase, r, layer, pl)
                     }
-                    e
-                } else if self.params.boundary_fit {
-                    map.volume_radiance_fitted(x, wo, &m.phase, k, r, plane, &mut sc.nb)
-                } else {
-                    map.volume_radiance_clipped(x, wo, &m.phase, k, r, plane, &mut sc.nb)
+                    (true, None) => map.volume_radiance_radius(x, wo, &m.phase, r),
+                    (false, Some(pl)) => {
+                        map.volume_radiance_layer(x, wo, &m.phase, k, r, layer, pl, &mut sc.nb)
+                    }
+                    (false, None) => map.volume_radiance(x, wo, &m.phase, k, r, &mut sc.nb),
                 };
                 sc.radius_sum += e.radius;
                 sc.estimates += 1;
@@ -484,6 +530,7 @@ pub fn render(
         step: settings.step,
         mode,
         max_depth: settings.max_depth,
+        layer: settings.kernel_layer,
         ..VpmParams::default()
     };
     let vpm = Vpm::new(scene, &maps, params);
