@@ -376,6 +376,11 @@ fn vpm_full_slab_matches_slab_simulator() {
 
 /// Disc of medium (dielectric `n`) a little above a checker ribbon, lit by an area light.
 fn disc_scene(n: f64, w: usize, h: usize) -> Scene {
+    disc_scene_height(n, w, h, 2.0)
+}
+
+/// [`disc_scene`] with a disc `height` mm thick.
+fn disc_scene_height(n: f64, w: usize, h: usize, height: f64) -> Scene {
     let ribbon = shape(
         Geometry::Quad(Quad {
             corner: Vec3::new(-10.0, -10.0, 0.0),
@@ -389,7 +394,7 @@ fn disc_scene(n: f64, w: usize, h: usize) -> Scene {
             center: Vec3::new(0.0, 0.0, 0.05),
             axis: Vec3::Z,
             radius: 4.0,
-            height: 2.0,
+            height,
         }),
         Boundary::Dielectric {
             inside: 1,
@@ -445,6 +450,18 @@ fn vpm_full_converges_to_volpath_on_disc() {
         e_f.abs() < 4.0 * se + 0.04,
         "relative error {e_f} (coarse {e_c})"
     );
+}
+
+/// The default gathering radius of a medium is capped by its typical half-thickness: a thin
+/// disc's is 0.25 mm however few photons there are, a 2 mm disc's is not capped at that.
+#[test]
+fn default_radius_respects_thin_media() {
+    for (height, lo, hi) in [(0.5, 0.24, 0.2501), (2.0, 0.3, 1.0001)] {
+        let scene = disc_scene_height(1.4, 8, 6, height);
+        let maps = trace_photons(&scene, 20_000, StoreMode::All, 5, 0, &Control::new()).unwrap();
+        let r = Vpm::new(&scene, &maps, VpmParams::default()).media[1].radius;
+        assert!(lo < r && r < hi, "disc {height} mm: radius {r}");
+    }
 }
 
 /// Index-matched disc (n = 1): eq. 13 is exact, so the paper's `vpm` and `vpm-full` both

@@ -17,7 +17,8 @@
 //! | setting | default | meaning |
 //! |---|---|---|
 //! | `k` | 64 | photons per estimate |
-//! | `radius` [mm] | 2 · cbrt(3 k V / (4π n)) per medium: twice the radius that holds k photons at the map's mean density (V: bounding box of the map's photons, n: its photons); surface map: the 2-D analogue, at most 0.1 × scene diagonal | largest gathering radius |
+//! | `radius` [mm] | 2 · cbrt(3 k V / (4π n)) per medium: twice the radius that holds k photons at the map's mean density (V: bounding box of the map's photons, n: its photons), at most the medium's typical half-thickness ([`half_thickness`]); surface map: the 2-D analogue, at most 0.1 × scene diagonal | largest gathering radius |
+//! | `kernel_layer` | 0.3 | volume kernel: half-height of the boundary-aligned layer kernel over the gathering radius; 0 = the paper's sphere |
 //! | `step` Δx [mm] | per medium min(0.5 / σt, scene diagonal / 64); never below 1e-5 × diagonal | ray-marching step |
 //! | `light_strata` (VpmParams only) | 3 | an area light's direct light on a surface: 3 × 3 stratified samples |
 //! | `map_threshold` (VpmParams only) | 0.3 | below this eye transmittance a march step queries the map with probability T / 0.3 (weight 0.3 / T, systematic sampling along the ray) |
