@@ -7,8 +7,10 @@ prod (j + alpha)/(j + 1) ~ i^(alpha - 1), so its variance grows like 1/r_i^3 ~ i
 the mean of N passes has variance ~ N^-alpha. The bias of pass i is first order in r_i near
 boundaries (the volume estimate's kernel reaches out of the medium), r_i ~ i^-(1-alpha)/3 =
 i^-0.1, so the mean's bias falls like N^-0.1. Hence MSE(N) = a N^-0.7 + b N^-0.2: noise
-dominates early, the boundary bias late. The slow test fits a, b >= 0 and checks every point of
-the measured curve against the fit; docs/ppm-convergence.md records a curve.
+dominates early, the boundary bias late. That held with the spherical kernel (curve in
+docs/ppm-convergence.md); the boundary-aligned layer kernel (kernel_layer) removes the
+first-order boundary bias, and the slow test now checks that the error falls to the
+reference's noise and the mean agrees with volpath.
 """
 
 import json
@@ -71,21 +73,19 @@ def test_ppm_error_falls_towards_volpath_short():
 def test_ppm_convergence_curve_matches_theory():
     rows = convergence((16, 12), ref_spp=16384, n_max=128, photons=20_000,
                        volume_photons=50_000)
-    n = np.array([r[0] for r in rows], dtype=float)
-    mse = np.array([r[1] for r in rows]) ** 2
-    basis = np.stack([n**-ALPHA, n ** (-2 * (1 - ALPHA) / 3)], axis=1)
-    # non-negative least squares on the relative MSE, weighted so every N counts alike
-    w = 1 / mse
-    coef, *_ = np.linalg.lstsq(basis * w[:, None], mse * w, rcond=None)
-    coef = np.maximum(coef, 0)
-    model = basis @ coef
-    print("\nN  rmse  model  noise-estimate  bias  se")
-    for r, m in zip(rows, model, strict=True):
-        print(f"{r[0]:4d} {r[1]:.4f} {math.sqrt(m):.4f} {r[2]:.4f} {r[3]:+.4f} {r[4]:.4f}")
-    print("fit a, b:", coef)
-    assert coef[0] > 0  # the noise term is there
-    assert np.all(np.abs(np.sqrt(model / mse) - 1) < 0.15), (rows, coef)
-    assert rows[-1][1] < 0.6 * rows[0][1]
+    print("\nN  rmse  noise-estimate  bias  se")
+    for r in rows:
+        print(f"{r[0]:4d} {r[1]:.4f} {r[2]:.4f} {r[3]:+.4f} {r[4]:.4f}")
+    # With the layer kernel the boundary bias is below what this reference resolves: the
+    # error (reference noise removed) falls like the noise term, N^-0.35 or faster, until it
+    # reaches the reference's own noise, and the image mean agrees within 4 standard errors.
+    # (With the sphere kernel the curve levelled off at 0.19 and the mean was -9 %:
+    # docs/ppm-convergence.md.)
+    e = {r[0]: r[1] for r in rows}
+    assert e[8] < 8 ** -0.3 * e[1], rows
+    assert e[128] < 0.05, rows
+    n128, _, _, bias, se = rows[-1]
+    assert abs(bias) < 4 * se, rows
 
 
 @pytest.mark.parametrize("material", ["enamel", "dentin"])
