@@ -446,8 +446,10 @@ fn vpm_full_converges_to_volpath_on_disc() {
     let (e_c, _) = compare("vpm-full 25k", &coarse, &reference, &var);
     let (e_f, se) = compare("vpm-full 400k", &fine, &reference, &var);
     assert!(rmse(&fine, &reference) < rmse(&coarse, &reference));
+    // density-estimation bias budget at 400 k photons: 2.5 % (measured −2.0 % with the layer
+    // kernel; the paper's sphere is about −7 % here)
     assert!(
-        e_f.abs() < 4.0 * se + 0.04,
+        e_f.abs() < 4.0 * se + 0.025,
         "relative error {e_f} (coarse {e_c})"
     );
 }
@@ -473,19 +475,21 @@ fn vpm_index_matched_agrees_with_volpath() {
     for mode in [StoreMode::Paper, StoreMode::All] {
         let img = vpm_image(&scene, 400_000, mode, 16, 23);
         let (e, se) = compare(&format!("{mode:?} n=1"), &img, &reference, &var);
-        assert!(e.abs() < 4.0 * se + 0.04, "{mode:?}: relative error {e}");
+        // bias budget 2.5 % (measured +0.7 % / +1.0 %)
+        assert!(e.abs() < 4.0 * se + 0.025, "{mode:?}: relative error {e}");
     }
 }
 
 /// The paper's `vpm` behind a refracting boundary: eq. 13 approximates the refracted shadow
-/// path, so its bias is measured and bounded loosely (15 %); `vpm-full` is the exact mode.
+/// path, so its bias is measured and bounded (4 %); `vpm-full` is the exact mode.
 #[test]
 fn vpm_paper_mode_bias_is_bounded_behind_refraction() {
     let scene = disc_scene(1.4, 20, 15);
     let (reference, var) = render(&scene, 512, 31, |r, rng| volpath::radiance(&scene, r, rng));
     let img = vpm_image(&scene, 400_000, StoreMode::Paper, 16, 33);
     let (e, se) = compare("vpm (paper) n=1.4", &img, &reference, &var);
-    assert!(e.abs() < 4.0 * se + 0.15, "relative error {e}");
+    // eq. 13's approximation plus the density estimate: 4 % (measured −1.1 %)
+    assert!(e.abs() < 4.0 * se + 0.04, "relative error {e}");
 }
 
 /// Nested media: a sphere of one medium inside a sphere of another (enamel around dentin),
@@ -547,7 +551,8 @@ fn vpm_full_nested_spheres_agree_with_volpath() {
     let (reference, var) = render(&scene, 1024, 41, |r, rng| volpath::radiance(&scene, r, rng));
     let img = vpm_image(&scene, 400_000, StoreMode::All, 16, 43);
     let (e, se) = compare("vpm-full nested", &img, &reference, &var);
-    assert!(e.abs() < 4.0 * se + 0.04, "relative error {e}");
+    // bias budget 2.5 % (measured +0.6 %)
+    assert!(e.abs() < 4.0 * se + 0.025, "relative error {e}");
 }
 
 /// The convergence curve recorded in docs/vpm-convergence.md (slow: run with
@@ -607,7 +612,8 @@ fn ppm_converges_to_volpath_on_disc() {
     let (_, _) = compare("ppm 2 passes", &few, &reference, &var);
     let (e, se) = compare("ppm 16 passes", &many, &reference, &var);
     assert!(rmse(&many, &reference) < rmse(&few, &reference));
-    assert!(e.abs() < 4.0 * se + 0.04, "relative error {e}");
+    // bias budget 2.5 % (measured +0.1 %; about −10 % with the paper's sphere)
+    assert!(e.abs() < 4.0 * se + 0.025, "relative error {e}");
     assert_eq!(run(2), few, "ppm must be deterministic");
 }
 
