@@ -600,6 +600,7 @@ def test_cli_render_writes_outputs(fake_core, tmp_path, capsys):
     (["--resolution", "64by48"], "--resolution = '64by48'"),
     (["--integrator", "vmp"], "did you mean 'vpm'"),
     (["--spp", "0"], "spp = 0: out of range"),
+    (["--kernel-layer", "2"], "kernel_layer = 2"),
 ])
 def test_cli_render_bad_options_exit_2(fake_core, tmp_path, capsys, args, message):
     with pytest.raises(SystemExit) as exc:
