@@ -34,6 +34,7 @@ from dentalux.outputs import peak_memory_bytes, write_render_outputs
 from dentalux.render import render
 from dentalux.scene.builtin import discs as discs_scene
 from dentalux.scene.load import scene_from_dict
+from dentalux.scene.schema import PATH_TRACERS
 from dentalux.slab import Layer, simulate
 
 PAPER_BANDS = [450.0, 540.0, 605.0]
@@ -134,7 +135,7 @@ def _render_figure(name: str, scene: dict, out: Path, quality: Quality, integrat
                     volume_photons=quality.volume_photons, k=quality.k,
                     radius=quality.radius_mm)
     settings.update(overrides)
-    if integrator in ("volpath", "path"):
+    if integrator in PATH_TRACERS:
         for key in ("volume_photons", "photons", "k", "radius"):
             settings.pop(key)
     result = render(sc, integrator=integrator, bands=bands, seed=1, correlated_bands=True,

@@ -280,7 +280,7 @@ def render_progressive(scene, stop: StopRule, executor=None, integrator: str | N
     the error curve, the stop reason and the last pass's radii [mm]."""
     from dentalux.render import RenderResult, _resolution, build_settings
     from dentalux.scene.load import as_scene
-    from dentalux.scene.schema import validate_bands
+    from dentalux.scene.schema import PATH_TRACERS, validate_bands
 
     t0 = time.perf_counter()
     sc = as_scene(scene)
@@ -296,7 +296,7 @@ def render_progressive(scene, stop: StopRule, executor=None, integrator: str | N
     keys = [0 if correlated_bands else int(round(wl)) for wl in band_list]
     traced = settings["photons"] + (settings["volume_photons"] if settings["integrator"] in (
         "vpm", "vpm-full", "ppm") else 0)
-    if settings["integrator"] in ("path", "volpath"):
+    if settings["integrator"] in PATH_TRACERS:
         traced = 0
     t_load = time.perf_counter() - t0
     run_settings = {k: v for k, v in settings.items() if k != "passes"}

@@ -25,7 +25,7 @@ from dentalux import _core
 from dentalux.progress import bar
 from dentalux.scene.load import as_scene
 from dentalux.scene.resolve import Scene
-from dentalux.scene.schema import RENDER_KEYS, validate_bands, validate_settings
+from dentalux.scene.schema import PATH_TRACERS, RENDER_KEYS, validate_bands, validate_settings
 
 # Settings passed through ``**options`` (the core's names, docs/render-contract.md).
 OPTIONS = ("volume_photons", "k", "radius", "step", "max_depth", "passes", "alpha",
@@ -126,7 +126,7 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     render_band = core_render_band()
     w, h = res
     # The core's progress(done) counts photons traced plus pixels finished (render.rs).
-    traced = 0 if settings["integrator"] in ("path", "volpath") else settings["photons"] + (
+    traced = 0 if settings["integrator"] in PATH_TRACERS else settings["photons"] + (
         settings["volume_photons"] if settings["integrator"] in ("vpm", "vpm-full", "ppm")
         else 0)
     work = max(1, traced * settings["passes"] + w * h)

@@ -15,6 +15,19 @@ use crate::math::Frame;
 use crate::sampling::{cosine_hemisphere, uniform_disc, uniform_sphere};
 use std::f64::consts::PI;
 
+/// A point on an area light: where, its radiance, its unit emitting normal, the light's area.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AreaPoint {
+    /// Position [mm].
+    pub point: Vec3,
+    /// Emitted radiance (towards `normal` only).
+    pub radiance: f64,
+    /// Unit normal of the emitting side.
+    pub normal: Vec3,
+    /// Area of the whole light [mm²] (1 / the sampling pdf).
+    pub area: f64,
+}
+
 /// A light source.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Light {
@@ -178,11 +191,48 @@ impl Light {
         }
     }
 
+    /// A point of an area light, uniform in its area, from uniforms `u` (`None` for point
+    /// and spot lights).
+    pub fn area_point(&self, u: [f64; 2]) -> Option<AreaPoint> {
+        match *self {
+            Light::Quad {
+                corner,
+                u: eu,
+                v: ev,
+                radiance,
+            } => {
+                let nn = eu.cross(ev);
+                Some(AreaPoint {
+                    point: corner + eu * u[0] + ev * u[1],
+                    radiance,
+                    normal: nn.normalize(),
+                    area: nn.length(),
+                })
+            }
+            Light::Disc {
+                center,
+                normal,
+                radius,
+                radiance,
+            } => {
+                let (x, y) = uniform_disc(u);
+                let f = Frame::from_axis(normal);
+                Some(AreaPoint {
+                    point: center + f.to_world(Vec3::new(x, y, 0.0)) * radius,
+                    radiance,
+                    normal,
+                    area: PI * radius * radius,
+                })
+            }
+            Light::Point { .. } | Light::Spot { .. } => None,
+        }
+    }
+
     /// Sample light arriving at `p` from uniforms `u`; `None` when no light can arrive
     /// (behind a one-sided emitter, outside a spot's cone, or zero emission).
     #[inline]
     pub fn sample_li(&self, p: Vec3, u: [f64; 2]) -> Option<LightSample> {
-        let (q, radiance, n, area) = match *self {
+        match *self {
             Light::Point {
                 position,
                 intensity,
@@ -201,36 +251,14 @@ impl Light {
                     ..s
                 });
             }
-            Light::Quad {
-                corner,
-                u: eu,
-                v: ev,
-                radiance,
-            } => {
-                let nn = eu.cross(ev);
-                (
-                    corner + eu * u[0] + ev * u[1],
-                    radiance,
-                    nn.normalize(),
-                    nn.length(),
-                )
-            }
-            Light::Disc {
-                center,
-                normal,
-                radius,
-                radiance,
-            } => {
-                let (x, y) = uniform_disc(u);
-                let f = Frame::from_axis(normal);
-                (
-                    center + f.to_world(Vec3::new(x, y, 0.0)) * radius,
-                    radiance,
-                    normal,
-                    PI * radius * radius,
-                )
-            }
-        };
+            _ => {}
+        }
+        let AreaPoint {
+            point: q,
+            radiance,
+            normal: n,
+            area,
+        } = self.area_point(u)?;
         let w = q - p;
         let dist2 = w.length_squared();
         let dist = dist2.sqrt();

@@ -56,7 +56,8 @@ def render_command(
     seed: int = typer.Option(None, help="random seed (default: the scene's, else 1)"),
     threads: int = typer.Option(None, help="worker threads (default: all cores)"),
     integrator: str = typer.Option(
-        None, help="pm | path | vpm | vpm-full | volpath | ppm (default: from the scene)"
+        None, help="pm | path | vpm | vpm-full | volpath | volpath-nee | ppm "
+                   "(default: from the scene)"
     ),
     k: int = typer.Option(None, help="nearest photons in a radiance estimate"),
     radius: float = typer.Option(None, help="maximum photon search radius [mm]"),

@@ -49,7 +49,9 @@ RENDER_KEYS = {
     "kernel_layer": 0.3,
 }
 
-INTEGRATORS = ("pm", "path", "vpm", "vpm-full", "volpath", "ppm")
+INTEGRATORS = ("pm", "path", "vpm", "vpm-full", "volpath", "volpath-nee", "ppm")
+# integrators that trace no photons
+PATH_TRACERS = ("path", "volpath", "volpath-nee")
 
 CAMERA_KEYS = {
     "position": REQUIRED,

@@ -5,11 +5,13 @@
 //! - [`photon_trace`]: the photon pass (eqs. 1–10) filling volume and surface photon maps.
 //! - [`vpm`]: volume photon mapping's camera pass (eqs. 11–13), modes `vpm` and `vpm-full`.
 //! - [`ppm`]: probabilistic progressive photon mapping (bounded memory, consistent).
-//! - [`volpath`]: the unbiased volumetric path tracer that judges them.
+//! - [`volpath`]: the unbiased volumetric path tracer that judges them; [`planar_nee`] lets
+//!   it connect to lights through flat refracting faces (a faster reference).
 //! - [`transport`]: boundary crossing, shadow-ray transmittance (eqs. 12–13), ray spawning.
 
 pub mod path;
 pub mod photon_trace;
+pub mod planar_nee;
 pub mod pm;
 pub mod ppm;
 pub mod render;

@@ -36,12 +36,16 @@ pub enum Integrator {
     VpmFull,
     /// Reference volumetric path tracer.
     Volpath,
+    /// The same, with next-event estimation also through flat refracting faces (planar_nee.rs):
+    /// same expectation, a faster reference where light enters media through flat faces.
+    VolpathNee,
     /// Progressive photon mapping.
     Ppm,
 }
 
 impl Integrator {
-    /// Parse the contract's name (`"pm"`, `"path"`, `"vpm"`, `"vpm-full"`, `"volpath"`, `"ppm"`).
+    /// Parse the contract's name (`"pm"`, `"path"`, `"vpm"`, `"vpm-full"`, `"volpath"`,
+    /// `"volpath-nee"`, `"ppm"`).
     pub fn parse(name: &str) -> Result<Self> {
         Ok(match name {
             "pm" => Integrator::Pm,
@@ -49,10 +53,11 @@ impl Integrator {
             "vpm" => Integrator::Vpm,
             "vpm-full" => Integrator::VpmFull,
             "volpath" => Integrator::Volpath,
+            "volpath-nee" => Integrator::VolpathNee,
             "ppm" => Integrator::Ppm,
             other => {
                 return Err(Error::InvalidInput(format!(
-                    "settings.integrator = {other:?}: allowed \"pm\", \"path\", \"vpm\", \"vpm-full\", \"volpath\", \"ppm\""
+                    "settings.integrator = {other:?}: allowed \"pm\", \"path\", \"vpm\", \"vpm-full\", \"volpath\", \"volpath-nee\", \"ppm\""
                 )))
             }
         })
@@ -312,7 +317,8 @@ pub fn render_band(
         Integrator::Pm => super::pm::render(scene, settings, control)?,
         Integrator::Vpm => super::vpm::render(scene, settings, control, false)?,
         Integrator::VpmFull => super::vpm::render(scene, settings, control, true)?,
-        Integrator::Volpath => super::volpath::render(scene, settings, control)?,
+        Integrator::Volpath => super::volpath::render(scene, settings, control, false)?,
+        Integrator::VolpathNee => super::volpath::render(scene, settings, control, true)?,
         Integrator::Ppm => super::ppm::render(scene, settings, control)?,
     };
     stats.seconds_total = t0.elapsed().as_secs_f64();

@@ -16,6 +16,7 @@
 use crate::control::Control;
 use crate::error::Result;
 use crate::geometry::Ray;
+use crate::integrators::planar_nee::PlanarFaces;
 use crate::integrators::render::{render_tiles, Settings, Stats};
 use crate::integrators::transport::{cross, spawn, straight_transmittance};
 use crate::math::Frame;
@@ -33,12 +34,23 @@ const MAX_EVENTS: u32 = 1_000_000;
 
 /// Radiance arriving at the camera along `ray`, which starts in `scene.ambient_medium`.
 pub fn radiance(scene: &Scene, ray: &Ray, rng: &mut Stream) -> f64 {
+    radiance_with(scene, &PlanarFaces::none(), ray, rng)
+}
+
+/// [`radiance`] with next-event estimation also through the flat refracting faces `faces`
+/// (`PlanarFaces::of(scene)`; see planar_nee.rs): same expectation, far less noise where
+/// light reaches a medium only through such faces.
+pub fn radiance_with(scene: &Scene, faces: &PlanarFaces, ray: &Ray, rng: &mut Stream) -> f64 {
     let mut ray = *ray;
     let mut medium = scene.ambient_medium;
     let mut beta = 1.0;
     let mut l = 0.0;
     // whether emission met next is invisible to the previous vertex's next-event estimation
     let mut count_emission = true;
+    // whether the path since its last scattering vertex is one the planar faces' next-event
+    // estimation counted (one refraction out through such a face, then index-matched only)
+    let mut planar_covered = false;
+    let mut after_scatter = false;
     let mut vertices = 0u32;
     for _ in 0..MAX_EVENTS {
         let m = &scene.media[medium as usize];
@@ -46,7 +58,7 @@ pub fn radiance(scene: &Scene, ray: &Ray, rng: &mut Stream) -> f64 {
         let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
         let s = sample_exponential(rng.uniform_open0(), m.sigma_t());
         let t_seg = s.min(t_hit);
-        if count_emission {
+        if count_emission && !planar_covered {
             if let Some((le, _)) = scene.emitted(&ray, t_seg) {
                 l += beta * le;
             }
@@ -67,9 +79,12 @@ pub fn radiance(scene: &Scene, ray: &Ray, rng: &mut Stream) -> f64 {
                     l += beta * m.phase.eval(ls.wi.dot(ray.d)) * ls.value * tr;
                 }
             }
+            l += beta * faces.estimate(scene, medium, x, ray.d, &m.phase, || rng.uniform2());
             let d = m.phase.sample(ray.d, rng.uniform2(), rng.uniform());
             ray = Ray { o: x, d };
             count_emission = false;
+            planar_covered = false;
+            after_scatter = true;
             vertices += 1;
         } else {
             let Some(hit) = hit else {
@@ -103,6 +118,8 @@ pub fn radiance(scene: &Scene, ray: &Ray, rng: &mut Stream) -> f64 {
                     let d = Frame::from_axis(n).to_world(cosine_hemisphere(rng.uniform2()));
                     ray = spawn(scene, &hit, d);
                     count_emission = false;
+                    planar_covered = false;
+                    after_scatter = false;
                     vertices += 1;
                 }
                 Boundary::Dielectric { inside, outside } => {
@@ -112,6 +129,14 @@ pub fn radiance(scene: &Scene, ray: &Ray, rng: &mut Stream) -> f64 {
                     } else {
                         c.refracted
                     };
+                    if c.mismatched() {
+                        // straight after a scattering vertex (no boundary between), a refraction
+                        // out through a flat face is what that vertex's planar estimate covered
+                        planar_covered = after_scatter
+                            && refracted.is_some()
+                            && faces.on_face(scene, c.from, hit.p, hit.n);
+                    }
+                    after_scatter = false;
                     match refracted {
                         Some(t) => {
                             beta *= (c.eta_i / c.eta_t).powi(2);
@@ -135,17 +160,28 @@ pub fn radiance(scene: &Scene, ray: &Ray, rng: &mut Stream) -> f64 {
     l
 }
 
-/// Render a band with the reference volumetric path tracer.
-pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(Vec<f32>, Stats)> {
+/// Render a band with the reference volumetric path tracer (`planar`: with next-event
+/// estimation through flat refracting faces, `volpath-nee`).
+pub fn render(
+    scene: &Scene,
+    settings: &Settings,
+    control: &Control,
+    planar: bool,
+) -> Result<(Vec<f32>, Stats)> {
     let t0 = Instant::now();
+    let faces = if planar {
+        PlanarFaces::of(scene)
+    } else {
+        PlanarFaces::none()
+    };
     let (image, totals) = render_tiles(scene, settings, control, |ray, rng, sc| {
         sc.rays += 1;
-        radiance(scene, ray, rng)
+        radiance_with(scene, &faces, ray, rng)
     })?;
     Ok((
         image,
         Stats {
-            integrator: "volpath".into(),
+            integrator: if planar { "volpath-nee" } else { "volpath" }.into(),
             seconds_camera: t0.elapsed().as_secs_f64(),
             rays: totals.rays,
             ..Stats::default()
