@@ -28,6 +28,10 @@ use crate::lights::AreaPoint;
 use crate::phase::PhaseFunction;
 use crate::scene::{Boundary, Geometry, Scene};
 
+/// Transmittance bound below which a face's estimate is computed only with probability
+/// bound / ROULETTE_BOUND (on the Fig. 3 discs most scattering vertices lie deep).
+const ROULETTE_BOUND: f64 = 0.05;
+
 /// A flat face through which a medium is left: a point on its plane, the unit normal out of
 /// the medium, the medium on the other side.
 type Face = (Vec3, Vec3, u32);
@@ -116,8 +120,16 @@ impl PlanarFaces {
             let Some(lp) = light.area_point(u()) else {
                 continue;
             };
-            for &face in faces {
-                sum += through_face(scene, medium, x, wo_in, phase, &lp, face);
+            let sigma_t = scene.media[medium as usize].sigma_t();
+            for &(p0, nf, beyond) in faces {
+                // deep below a face its light is faint (at most e^(−σt h1)) but costs as much:
+                // Russian roulette on that bound, weighted by its inverse (unbiased)
+                let bound = (-sigma_t * (p0 - x).dot(nf).max(0.0)).exp();
+                let keep = (bound / ROULETTE_BOUND).min(1.0);
+                if keep < 1.0 && u()[0] >= keep {
+                    continue;
+                }
+                sum += through_face(scene, medium, x, wo_in, phase, &lp, (p0, nf, beyond)) / keep;
             }
         }
         sum
@@ -214,7 +226,7 @@ pub fn snell_root(n1: f64, n2: f64, h1: f64, h2: f64, d: f64) -> f64 {
     let (mut lo, mut hi) = (0.0, d);
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
+        if mid <= lo || mid >= hi || hi - lo < 1e-13 * h1.min(h2) {
             break;
         }
         if f(mid) > 0.0 {
