@@ -730,6 +730,17 @@ def test_discs_scene_renders_with_vpm():
     assert res.radiance.mean() > 0
 
 
+def test_discs_scene_renders_with_volpath_nee():
+    # the planar next-event variant of the reference path tracer runs through the whole
+    # pipeline (its physics is checked in crates/dentalux-core/tests/volume_transport.rs)
+    d = discs(material="enamel", resolution=(16, 12))
+    res = dentalux.render(d, integrator="volpath-nee", spp=4, bands=[540.0], seed=1,
+                          progress=False)
+    assert np.all(np.isfinite(res.radiance)) and res.radiance.min() >= 0
+    assert res.radiance.mean() > 0
+    assert res.stats["bands"][0]["integrator"] == "volpath-nee"
+
+
 def test_image_texture_from_file(tmp_path):
     from PIL import Image
 
