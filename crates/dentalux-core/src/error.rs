@@ -26,6 +26,11 @@ impl fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
+/// Check that `value` is finite and > 0 (lengths, sizes): [`check_range`] over (0, inf).
+pub fn check_positive(field: &str, value: f64, unit: &str) -> Result<()> {
+    check_range(field, value, 0.0, true, f64::INFINITY, true, unit)
+}
+
 /// Check that `value` is finite and inside `[lo, hi]` (bounds open where `*_open` is set).
 pub fn check_range(
     field: &str,

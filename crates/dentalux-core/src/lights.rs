@@ -9,7 +9,7 @@
 //! Area lights are emitters only: they are not in the BVH and cast no shadow; a camera ray
 //! (or a ray after a specular bounce) sees them through [`Light::le`] from their front side.
 
-use crate::error::{check_range, Error, Result};
+use crate::error::{check_positive, check_range, Error, Result};
 use crate::geometry::{Ray, Vec3};
 use crate::math::Frame;
 use crate::sampling::{cosine_hemisphere, uniform_disc, uniform_sphere};
@@ -155,15 +155,7 @@ impl Light {
                 ..
             } => {
                 nonneg("radiance", radiance, "")?;
-                check_range(
-                    &format!("{field}.radius"),
-                    radius,
-                    0.0,
-                    true,
-                    f64::INFINITY,
-                    true,
-                    "mm",
-                )?;
+                check_positive(&format!("{field}.radius"), radius, "mm")?;
                 unit(&format!("{field}.normal"), normal).map(|_| ())
             }
             Light::Point { intensity, .. } => nonneg("intensity", intensity, ""),
@@ -278,24 +270,14 @@ impl Light {
     /// Emit a photon: a ray from the light and its weight, whose mean over the uniforms is
     /// the power Φ (a photon of N carries weight/N).
     pub fn sample_emission(&self, u1: [f64; 2], u2: [f64; 2]) -> (Ray, f64) {
+        // area lights: a uniform point, a cosine-distributed direction about the normal
+        if let Some(a) = self.area_point(u1) {
+            let d = Frame::from_axis(a.normal).to_world(cosine_hemisphere(u2));
+            return (Ray::new(a.point, d), self.power());
+        }
         match *self {
-            Light::Quad { corner, u, v, .. } => {
-                let n = u.cross(v).normalize();
-                let o = corner + u * u1[0] + v * u1[1];
-                let d = Frame::from_axis(n).to_world(cosine_hemisphere(u2));
-                (Ray::new(o, d), self.power())
-            }
-            Light::Disc {
-                center,
-                normal,
-                radius,
-                ..
-            } => {
-                let f = Frame::from_axis(normal);
-                let (x, y) = uniform_disc(u1);
-                let o = center + f.to_world(Vec3::new(x, y, 0.0)) * radius;
-                (Ray::new(o, f.to_world(cosine_hemisphere(u2))), self.power())
-            }
+            // handled above (`area_point` is `Some` for them)
+            Light::Quad { .. } | Light::Disc { .. } => (Ray::new(Vec3::ZERO, Vec3::Z), 0.0),
             Light::Point { position, .. } => (Ray::new(position, uniform_sphere(u1)), self.power()),
             Light::Spot {
                 position,

@@ -6,7 +6,7 @@
 //! rounding of a coordinate, and far below any feature size a dental scene has.
 
 use crate::camera::Camera;
-use crate::error::{check_range, Error, Result};
+use crate::error::{check_positive, Error, Result};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::mesh::{intersect_corners, Topology, TriangleMesh};
 use crate::geometry::shapes::{BoxShape, Cylinder, LocalHit, Quad, Sphere};
@@ -72,17 +72,7 @@ impl ShapeInstance {
         transform: Option<Transform>,
         boundary: Boundary,
     ) -> Result<Self> {
-        let positive = |k: &str, v: f64| {
-            check_range(
-                &format!("{field}.{k}"),
-                v,
-                0.0,
-                true,
-                f64::INFINITY,
-                true,
-                "mm",
-            )
-        };
+        let positive = |k: &str, v: f64| check_positive(&format!("{field}.{k}"), v, "mm");
         let finite = |k: &str, v: Vec3| {
             if v.is_finite() {
                 Ok(())

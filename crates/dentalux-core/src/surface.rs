@@ -2,7 +2,7 @@
 //! the shape's uv or on world xy, an image), or black. Reflectance ρ is at one band; the
 //! BRDF is ρ/π on both sides of the surface.
 
-use crate::error::{check_range, Error, Result};
+use crate::error::{check_positive, check_range, Error, Result};
 use crate::geometry::{Hit, Vec3};
 
 /// Where a texture looks up its coordinates.
@@ -60,15 +60,7 @@ impl Surface {
             Surface::Checker { a, b, size, .. } => {
                 unit("a", *a)?;
                 unit("b", *b)?;
-                check_range(
-                    &format!("{field}.size"),
-                    *size,
-                    0.0,
-                    true,
-                    f64::INFINITY,
-                    true,
-                    "mm",
-                )
+                check_positive(&format!("{field}.size"), *size, "mm")
             }
             Surface::Image {
                 width,
@@ -96,15 +88,7 @@ impl Surface {
                         "",
                     )?;
                 }
-                check_range(
-                    &format!("{field}.size"),
-                    *size,
-                    0.0,
-                    true,
-                    f64::INFINITY,
-                    true,
-                    "mm",
-                )
+                check_positive(&format!("{field}.size"), *size, "mm")
             }
             Surface::Black => Ok(()),
         }

@@ -142,15 +142,7 @@ impl Settings {
         }
         for (k, v) in [("radius", self.radius), ("step", self.step)] {
             if let Some(v) = v {
-                crate::error::check_range(
-                    &format!("settings.{k}"),
-                    v,
-                    0.0,
-                    true,
-                    f64::INFINITY,
-                    true,
-                    "mm",
-                )?;
+                crate::error::check_positive(&format!("settings.{k}"), v, "mm")?;
             }
         }
         crate::error::check_range("settings.alpha", self.alpha, 0.0, true, 1.0, true, "")?;

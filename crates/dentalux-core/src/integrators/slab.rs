@@ -29,7 +29,7 @@
 //! division), and a single-lobe phase function draws one uniform per scattering.
 
 use crate::control::Control;
-use crate::error::{check_range, Error, Result};
+use crate::error::{check_positive, check_range, Error, Result};
 use crate::fresnel::reflectance_and_cos_t;
 use crate::math::{rotate_direction_scaled, Vec3};
 use crate::medium::Medium;
@@ -179,15 +179,7 @@ impl SlabConfig {
                 l.medium.eta,
                 l.medium.phase,
             )?;
-            check_range(
-                &format!("{name}thickness"),
-                l.thickness,
-                0.0,
-                true,
-                f64::INFINITY,
-                true,
-                "mm",
-            )?;
+            check_positive(&format!("{name}thickness"), l.thickness, "mm")?;
         }
         check_range("n_above", self.n_above, 1.0, false, f64::INFINITY, true, "")?;
         check_range("n_below", self.n_below, 1.0, false, f64::INFINITY, true, "")?;
@@ -211,7 +203,7 @@ impl SlabConfig {
             if bins == 0 {
                 return Err(Error::InvalidInput("radial bins = 0: allowed ≥ 1".into()));
             }
-            check_range("radial max", rmax, 0.0, true, f64::INFINITY, true, "mm")?;
+            check_positive("radial max", rmax, "mm")?;
         }
         if self.angular_bins == Some(0) {
             return Err(Error::InvalidInput("angular bins = 0: allowed ≥ 1".into()));
