@@ -278,9 +278,9 @@ def render_progressive(scene, stop: StopRule, executor=None, integrator: str | N
     process): same arguments, plus the stop rule. Returns a :class:`RenderResult` whose
     ``stats["progressive"]`` holds passes, photons, the error estimate (module docstring),
     the error curve, the stop reason and the last pass's radii [mm]."""
-    from dentalux.render import RenderResult, _resolution, build_settings
+    from dentalux.render import RenderResult, _resolution, build_settings, photons_traced
     from dentalux.scene.load import as_scene
-    from dentalux.scene.schema import PATH_TRACERS, validate_bands
+    from dentalux.scene.schema import validate_bands
 
     t0 = time.perf_counter()
     sc = as_scene(scene)
@@ -294,10 +294,7 @@ def render_progressive(scene, stop: StopRule, executor=None, integrator: str | N
         settings = dict(settings, threads=task_threads)
     scene_jsons = [sc.to_json(wl, res) for wl in band_list]
     keys = [0 if correlated_bands else int(round(wl)) for wl in band_list]
-    traced = settings["photons"] + (settings["volume_photons"] if settings["integrator"] in (
-        "vpm", "vpm-full", "ppm") else 0)
-    if settings["integrator"] in PATH_TRACERS:
-        traced = 0
+    traced = photons_traced(settings)
     t_load = time.perf_counter() - t0
     run_settings = {k: v for k, v in settings.items() if k != "passes"}
     out = run_passes(scene_jsons, keys, run_settings, stop, executor, progress=progress,

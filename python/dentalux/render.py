@@ -34,6 +34,15 @@ OPTIONS = ("volume_photons", "k", "radius", "step", "max_depth", "passes", "alph
 TICKS = 1000
 
 
+def photons_traced(settings: dict) -> int:
+    """Photons one pass of one band traces: none for the path tracers, surface photons for
+    ``pm``, surface plus volume photons for the volume integrators."""
+    if settings["integrator"] in PATH_TRACERS:
+        return 0
+    volume = settings["integrator"] in ("vpm", "vpm-full", "ppm")
+    return settings["photons"] + (settings["volume_photons"] if volume else 0)
+
+
 @dataclass
 class RenderResult:
     """radiance: float32 (height, width, bands) [W/(m^2 sr nm), up to the lights' scale];
@@ -126,10 +135,7 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     render_band = core_render_band()
     w, h = res
     # The core's progress(done) counts photons traced plus pixels finished (render.rs).
-    traced = 0 if settings["integrator"] in PATH_TRACERS else settings["photons"] + (
-        settings["volume_photons"] if settings["integrator"] in ("vpm", "vpm-full", "ppm")
-        else 0)
-    work = max(1, traced * settings["passes"] + w * h)
+    work = max(1, photons_traced(settings) * settings["passes"] + w * h)
     images, per_band, seconds = [], [], []
     t_load = time.perf_counter() - t0
     with bar(len(band_list) * TICKS, f"render {len(band_list)} band(s)", progress) as cb:

@@ -734,7 +734,7 @@ fn layer_experiment() {
         let b = mean(&reference);
         let noise2 = var.iter().sum::<f64>() / var.len() as f64;
         for photons in [400_000u64, 3_200_000] {
-            for layer in [0.0, 0.3, -0.3] {
+            for layer in [0.0, vpm::DEFAULT_LAYER] {
                 let params = VpmParams {
                     layer,
                     ..VpmParams::default()
