@@ -9,6 +9,11 @@ measured per-sample variance (t_spp · var_1spp / (e · mean)²).
 
     .venv/bin/python benchmarks/render_discs_truth.py [--ref-spp 2048] [--budget 60]
         [--configs 4000000:200:4,8000000:100:4,16000000:50:4]
+        [--ppm 2000000:50:4:0.7,...]
+
+`--ppm photons:k:spp:alpha` configurations run the `ppm` integrator (radii shrink by the
+Knaus-Zwicker schedule, so its bias vanishes as passes grow) for 1, 2, 4, ... passes, each a
+separate render whose own wall time is reported (the curve costs about twice its last point).
 """
 
 from __future__ import annotations
@@ -36,6 +41,7 @@ def main() -> None:
     ap.add_argument("--ref-spp", type=int, default=2048, help="volpath-nee spp (two halves)")
     ap.add_argument("--budget", type=float, default=60.0, help="seconds per vpm configuration")
     ap.add_argument("--configs", default="4000000:200:4,8000000:100:4,16000000:50:4")
+    ap.add_argument("--ppm", default="", help="photons:k:spp:alpha,... (ppm integrator)")
     ap.add_argument("--surface-photons", type=int, default=200_000)
     args = ap.parse_args()
     res = tuple(int(v) for v in args.resolution.split("x"))
@@ -64,7 +70,23 @@ def main() -> None:
     print("| photons/pass | k | spp | passes | seconds | rel. RMSE vs truth | mean vs truth "
           "| volpath s | volpath-nee s | speed-up vs volpath |")
     print("|---|---|---|---|---|---|---|---|---|---|")
-    for c, conf in enumerate(args.configs.split(",")):
+    for c, conf in enumerate(filter(None, args.ppm.split(","))):
+        photons, k, spp, alpha = conf.split(":")
+        n = 1
+        while True:
+            img, _, wall = render(scene, res, integrator="ppm", spp=int(spp), seed=5000 + c,
+                                  volume_photons=int(float(photons)),
+                                  photons=args.surface_photons, k=int(k), passes=n,
+                                  alpha=float(alpha))
+            e = err(img)
+            t1, t2 = cost(e) if e > 0 else (float("inf"),) * 2
+            print(f"| ppm {photons} a={alpha} | {k} | {spp} | {n} | {wall:.1f} | {e:.4f} "
+                  f"| {(img.mean() - level) / level:+.4f} | {t1:.0f} | {t2:.0f} "
+                  f"| {t1 / wall:.0f}x |", flush=True)
+            if wall * 2 > args.budget:
+                break
+            n *= 2
+    for c, conf in enumerate(filter(None, args.configs.split(","))):
         photons, k, spp = (int(float(x)) for x in conf.split(":"))
 
         def report(n, wall, img, photons=photons, k=k, spp=spp):

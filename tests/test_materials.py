@@ -128,6 +128,25 @@ def test_scaling_is_explicit_and_recorded():
         m.scaled(g=1.0)
 
 
+def test_similarity_relation_keeps_reduced_scattering_and_is_recorded():
+    m = M.get("dentin")
+    s = m.similar(0.75, note="fewer photons")
+    assert s.is_scaled and s.name.endswith("+scaled") and not m.is_scaled
+    np.testing.assert_allclose(s.mus * (1 - s.g), m.mus * (1 - m.g))  # mus' kept
+    assert np.all(s.g == 0.75) and np.all(s.mua == m.mua) and np.all(s.n == m.n)
+    record = s.provenance["scaling"][-1]
+    assert record["similarity_g"] == 0.75 and "fewer photons" in record["note"]
+    np.testing.assert_allclose(record["mus_factors"], (1 - m.g) / 0.25, rtol=1e-5)
+    assert "similarity relation to g = 0.75" in s.value_provenance("mus")
+    # a wavelength already at or below the target g is left as it is
+    bio = M.get("biomaterial-table1")
+    same = bio.similar(0.8)
+    np.testing.assert_array_equal(same.mus, bio.mus)
+    np.testing.assert_array_equal(same.g, bio.g)
+    with pytest.raises(ValueError, match=r"g = 1.0 is out of range"):
+        m.similar(1.0)
+
+
 VALID = """
 [materials.test-medium]
 description = "test"

@@ -128,9 +128,10 @@ class FakeCore:
     def __call__(self, scene_json, settings_json, progress=None):
         scene, settings = json.loads(scene_json), json.loads(settings_json)
         check_contract(scene)
-        assert set(settings) == {"integrator", "spp", "photons", "volume_photons", "k",
-                                 "radius", "step", "seed", "band", "threads", "max_depth",
-                                 "passes", "alpha", "final_gather", "kernel_layer"}
+        assert set(settings) == {"integrator", "spp", "photons", "volume_photons",
+                                 "volume_stored", "aim", "k", "radius", "step", "seed",
+                                 "band", "threads", "max_depth", "passes", "alpha",
+                                 "final_gather", "kernel_layer"}
         self.calls.append((scene, settings))
         if progress is not None:
             progress(1)
@@ -544,7 +545,7 @@ def test_render_api_with_fake_core(fake_core):
     assert np.all(result.radiance[..., 0] == 605) and np.all(result.radiance[..., 1] == 450)
     scene0, settings0 = fake_core.calls[0]
     assert settings0 == {"integrator": "pm", "spp": 2, "photons": 100, "volume_photons": 5,
-                         "k": 8, "radius": 1.5, "step": None, "seed": 7, "band": 605,
+                         "volume_stored": 0, "aim": 0.5, "k": 8, "radius": 1.5, "step": None, "seed": 7, "band": 605,
                          "threads": None, "max_depth": 64, "passes": 1, "alpha": 0.7,
                          "final_gather": False, "kernel_layer": 0.3}
     # red wall at 605 nm from its reflectance table
@@ -566,6 +567,10 @@ def test_render_api_bad_arguments(fake_core):
         dentalux.render(d, spp=0)
     with pytest.raises(ValueError, match=r"kernel_layer = 1.5: out of range"):
         dentalux.render(d, kernel_layer=1.5)
+    with pytest.raises(ValueError, match=r"aim = 1: out of range"):
+        dentalux.render(d, aim=1)
+    with pytest.raises(ValueError, match=r"volume_stored = -5: out of range"):
+        dentalux.render(d, volume_stored=-5)
     with pytest.raises(ValueError, match=r"bands\[0\] = 100: out of range"):
         dentalux.render(d, bands=[100])
     with pytest.raises(ValueError, match=r"bands must be distinct"):
@@ -601,6 +606,8 @@ def test_cli_render_writes_outputs(fake_core, tmp_path, capsys):
     (["--integrator", "vmp"], "did you mean 'vpm'"),
     (["--spp", "0"], "spp = 0: out of range"),
     (["--kernel-layer", "2"], "kernel_layer = 2"),
+    (["--aim", "-0.1"], "aim = -0.1"),
+    (["--volume-stored", "-1"], "volume_stored = -1"),
 ])
 def test_cli_render_bad_options_exit_2(fake_core, tmp_path, capsys, args, message):
     with pytest.raises(SystemExit) as exc:

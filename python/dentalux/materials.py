@@ -180,6 +180,37 @@ class Material:
                 for q, v in self.ci.items() if not (q == "g" and g is not None)},
         )
 
+    def similar(self, g: float, note: str = "") -> Material:
+        """A copy with the anisotropy lowered to ``g`` by the similarity relation: wherever
+        g_λ > g, μs becomes μs (1 − g_λ)/(1 − g), so the reduced scattering coefficient
+        μs' = μs (1 − g) is kept and light that has scattered many times is nearly unchanged
+        (docs/materials.md gives the measured error). Wavelengths with g_λ ≤ g keep their
+        values. The paper lowered its teeth's anisotropy for the same reason: a strongly
+        forward phase function weights few photons of a density estimate, which shows as
+        grain. Recorded like :meth:`scaled` (``+scaled`` name, ``provenance["scaling"]``)."""
+        if not (isinstance(g, int | float) and -1.0 < g < 1.0):
+            raise ValueError(f"g = {g!r} is out of range: allowed (-1, 1)")
+        lower = self.g > g
+        factor = np.where(lower, (1.0 - self.g) / (1.0 - g), 1.0)
+        why = f"similarity relation to g = {g:g}, mus x (1 - g_lambda)/(1 - {g:g})"
+        out = self.scaled(note=f"{why}; {note}" if note else why)
+        prov = out.provenance
+        prov["scaling"][-1].pop("mus_factor")
+        prov["scaling"][-1].update({"similarity_g": float(g),
+                                    "mus_factors": [round(float(f), 6) for f in factor]})
+        for q in ("mus", "g"):
+            entry = prov.setdefault("values", {}).get(q, "")
+            suffix = f" [similarity relation to g = {g:g}]"
+            prov["values"][q] = ([e + suffix for e in entry] if isinstance(entry, list)
+                                 else entry + suffix)
+        return Material(
+            name=out.name, wavelength_nm=out.wavelength_nm, mua=out.mua,
+            mus=self.mus * factor, g=np.where(lower, float(g), self.g), fd=out.fd, n=out.n,
+            provenance=prov, description=out.description,
+            ci={q: v * (factor[:, None] if q == "mus" else 1.0)
+                for q, v in out.ci.items() if q != "g"},
+        )
+
     @property
     def is_scaled(self) -> bool:
         """True when :meth:`scaled` produced this material (see ``provenance['scaling']``)."""

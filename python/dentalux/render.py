@@ -28,8 +28,8 @@ from dentalux.scene.resolve import Scene
 from dentalux.scene.schema import PATH_TRACERS, RENDER_KEYS, validate_bands, validate_settings
 
 # Settings passed through ``**options`` (the core's names, docs/render-contract.md).
-OPTIONS = ("volume_photons", "k", "radius", "step", "max_depth", "passes", "alpha",
-           "final_gather", "kernel_layer")
+OPTIONS = ("volume_photons", "volume_stored", "aim", "k", "radius", "step", "max_depth",
+           "passes", "alpha", "final_gather", "kernel_layer")
 # Ticks of the progress bar per band; the core's progress(done) is mapped onto them.
 TICKS = 1000
 
@@ -118,8 +118,10 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     otherwise). spp: samples per pixel; photons: surface photons; seed: random seed;
     threads: worker threads (default all cores; the image does not depend on it);
     resolution: (width, height) or "WxH", overriding the camera's. ``options``:
-    volume_photons, k, radius [mm], step [mm], max_depth, passes, alpha, final_gather,
-    kernel_layer (0 = the paper's spherical kernel).
+    volume_photons, volume_stored (photons the volume maps should hold: emission stops there,
+    at most volume_photons), aim (fraction of volume photons aimed at the media, [0, 1)),
+    k, radius [mm], step [mm], max_depth, passes, alpha, final_gather, kernel_layer (0 = the
+    paper's spherical kernel).
     correlated_bands: give every band the same random streams (band key 0) instead of one
     per wavelength. Photon and camera paths then share their random numbers across bands
     (correlated sampling), so Monte Carlo noise is nearly the same in every band: it shows

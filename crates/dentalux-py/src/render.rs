@@ -566,6 +566,8 @@ fn settings_from_json(text: &str) -> R<(Settings, Option<usize>)> {
         spp: to_u32("spp", o.uint_or("spp", d.spp as u64)?)?,
         photons: o.uint_or("photons", d.photons)?,
         volume_photons: o.uint_or("volume_photons", d.volume_photons)?,
+        volume_stored: o.uint_or("volume_stored", d.volume_stored)?,
+        aim: o.num_or("aim", d.aim)?,
         k: o.uint_or("k", d.k as u64)? as usize,
         radius: o.opt_num("radius")?,
         step: o.opt_num("step")?,

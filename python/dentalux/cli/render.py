@@ -51,6 +51,12 @@ def render_command(
     spp: int = typer.Option(None, help="samples per pixel (default: the scene's render.spp)"),
     photons: int = typer.Option(None, help="surface photons per band"),
     volume_photons: int = typer.Option(None, help="volume photons per band (vpm, vpm-full)"),
+    volume_stored: int = typer.Option(
+        None, "--volume-stored",
+        help="photons the volume maps should hold: emit until then (at most volume-photons)"),
+    aim: float = typer.Option(
+        None, help="fraction of the volume photons aimed at the media, in [0, 1) "
+                   "(default 0.5; unbiased)"),
     bands: str = typer.Option(None, help="wavelengths [nm], e.g. 450,540,605"),
     resolution: str = typer.Option(None, help="WIDTHxHEIGHT in pixels, e.g. 128x96"),
     seed: int = typer.Option(None, help="random seed (default: the scene's, else 1)"),
@@ -84,7 +90,8 @@ def render_command(
     t0 = time.perf_counter()
     scene = load_scene(scene_file)
     band_list = parse_bands(bands)
-    options = {k_: v for k_, v in (("volume_photons", volume_photons), ("k", k),
+    options = {k_: v for k_, v in (("volume_photons", volume_photons),
+                                   ("volume_stored", volume_stored), ("aim", aim), ("k", k),
                                    ("radius", radius), ("step", step), ("alpha", alpha),
                                    ("kernel_layer", kernel_layer))
                if v is not None}

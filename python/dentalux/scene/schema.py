@@ -38,6 +38,8 @@ RENDER_KEYS = {
     "spp": 16,
     "photons": 200_000,
     "volume_photons": 1_000_000,
+    "volume_stored": 0,
+    "aim": 0.5,
     "k": 64,
     "radius": None,
     "step": None,
@@ -610,7 +612,8 @@ def validate_settings(d: dict, path: str = "settings") -> dict:
     out = dict(d)
     if out.get("integrator") is not None:
         out["integrator"] = string(out["integrator"], p("integrator"), INTEGRATORS)
-    for key, lo in (("spp", 1), ("photons", 0), ("volume_photons", 0), ("k", 1),
+    for key, lo in (("spp", 1), ("photons", 0), ("volume_photons", 0), ("volume_stored", 0),
+                    ("k", 1),
                     ("seed", 0), ("max_depth", 1), ("passes", 1)):
         if key in out:
             out[key] = integer(out[key], p(key), lo=lo)
@@ -620,6 +623,8 @@ def validate_settings(d: dict, path: str = "settings") -> dict:
     if "alpha" in out:
         out["alpha"] = number(out["alpha"], p("alpha"), lo=0.0, hi=1.0, lo_open=True,
                               hi_open=True)
+    if "aim" in out:
+        out["aim"] = number(out["aim"], p("aim"), lo=0.0, hi=1.0, hi_open=True)
     if "final_gather" in out:
         out["final_gather"] = boolean(out["final_gather"], p("final_gather"))
     if "kernel_layer" in out:

@@ -2,13 +2,15 @@
 //!
 //! - [`slab`]: layered slab lit by a beam or diffuse light; what a spectrophotometer with
 //!   an integrating sphere measures (total transmittance, reflectance, absorption).
-//! - [`photon_trace`]: the photon pass (eqs. 1–10) filling volume and surface photon maps.
+//! - [`photon_trace`]: the photon pass (eqs. 1–10) filling volume and surface photon maps;
+//!   [`aim`] sends part of the volume pass straight at the media.
 //! - [`vpm`]: volume photon mapping's camera pass (eqs. 11–13), modes `vpm` and `vpm-full`.
 //! - [`ppm`]: probabilistic progressive photon mapping (bounded memory, consistent).
 //! - [`volpath`]: the unbiased volumetric path tracer that judges them; [`planar_nee`] lets
 //!   it connect to lights through flat refracting faces (a faster reference).
 //! - [`transport`]: boundary crossing, shadow-ray transmittance (eqs. 12–13), ray spawning.
 
+pub mod aim;
 pub mod path;
 pub mod photon_trace;
 pub mod planar_nee;

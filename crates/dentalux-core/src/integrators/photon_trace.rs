@@ -20,6 +20,7 @@
 use crate::control::Control;
 use crate::error::Result;
 use crate::geometry::Ray;
+use crate::integrators::aim::Aim;
 use crate::integrators::transport::{cross, spawn};
 use crate::math::Frame;
 use crate::photon_map::{Photon, PhotonMap};
@@ -94,6 +95,24 @@ impl Ledger {
             ..Self::default()
         }
     }
+    fn scale(&mut self, f: f64) {
+        for v in [
+            &mut self.emitted,
+            &mut self.absorbed_surface,
+            &mut self.escaped,
+            &mut self.cut,
+            &mut self.stored_surface,
+        ] {
+            *v *= f;
+        }
+        for v in self
+            .absorbed_medium
+            .iter_mut()
+            .chain(&mut self.stored_volume)
+        {
+            *v *= f;
+        }
+    }
     fn add(&mut self, o: &Ledger) {
         self.emitted += o.emitted;
         self.absorbed_surface += o.absorbed_surface;
@@ -141,15 +160,21 @@ struct BatchOut {
     volume: Vec<Vec<Photon>>,
     surface: Vec<Photon>,
     ledger: Ledger,
+    /// Photons traced (fewer than asked when `stop_at` ended the batch).
+    traced: u64,
 }
 
-/// Trace one batch of `count` photons.
+/// Trace one batch of `count` photons (aimed at the media when `aim` is given); with
+/// `stop_at`, stop after the photon whose events bring the batch's volume maps to that many.
+#[allow(clippy::too_many_arguments)]
 fn trace_batch(
     scene: &Scene,
     n_total: u64,
     count: u64,
     mode: StoreMode,
     targets: Targets,
+    aim: Option<&Aim>,
+    stop_at: Option<usize>,
     rng: &mut Stream,
     control: &Control,
 ) -> BatchOut {
@@ -158,15 +183,26 @@ fn trace_batch(
         volume: vec![Vec::new(); nm],
         surface: Vec::new(),
         ledger: Ledger::new(nm),
+        traced: 0,
     };
     let led = &mut out.ledger;
     for _ in 0..count {
+        if let Some(stop) = stop_at {
+            if out.volume.iter().map(Vec::len).sum::<usize>() >= stop {
+                break;
+            }
+        }
+        out.traced += 1;
         // a long random walk (huge optical depth) must still stop promptly on cancel
         if control.is_cancelled() {
             break;
         }
         let (li, p_light) = scene.pick_light(rng.uniform());
-        let (mut ray, weight) = scene.lights[li].sample_emission(rng.uniform2(), rng.uniform2());
+        let light = &scene.lights[li];
+        let (mut ray, weight) = match aim {
+            Some(a) => a.sample_emission(light, rng.uniform2(), rng.uniform2(), rng.uniform()),
+            None => light.sample_emission(rng.uniform2(), rng.uniform2()),
+        };
         // Φ_l / (N · P(l)): every photon carries Φ_total / N for uniform emission
         let power = weight / (p_light * n_total as f64);
         if !(power > 0.0 && power.is_finite()) {
@@ -288,37 +324,110 @@ pub fn trace_photons_with(
     band: u64,
     control: &Control,
 ) -> Result<PhotonMaps> {
+    let emission = Emission {
+        photons,
+        ..Emission::default()
+    };
+    trace_emission(scene, &emission, mode, targets, tag, seed, band, control)
+}
+
+/// How many photons a pass emits, and where.
+#[derive(Debug, Clone, Default)]
+pub struct Emission {
+    /// Photons to emit (with `stored_cap`: at most this many).
+    pub photons: u64,
+    /// Stop after the photon at which the volume maps hold at least this many photons
+    /// (counted in batch order, so the maps do not depend on the thread count); powers are
+    /// then normalised by the photons actually emitted.
+    pub stored_cap: Option<u64>,
+    /// Aim part of the photons at the media ([`Aim`]).
+    pub aim: Option<Aim>,
+}
+
+/// [`trace_photons_with`] with a stored-photon budget and aimed emission.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_emission(
+    scene: &Scene,
+    emission: &Emission,
+    mode: StoreMode,
+    targets: Targets,
+    tag: u64,
+    seed: u64,
+    band: u64,
+    control: &Control,
+) -> Result<PhotonMaps> {
     let t0 = Instant::now();
+    let photons = emission.photons;
     let nm = scene.media.len();
     let n_batches = photons.div_ceil(BATCH);
     let chunk = (rayon::current_num_threads() as u64 * 8).max(1);
     let mut volume: Vec<Vec<Photon>> = vec![Vec::new(); nm];
     let mut surface = Vec::new();
     let mut ledger = Ledger::new(nm);
+    let mut emitted = 0u64;
+    let mut stored = 0u64;
     let mut start = 0;
-    while start < n_batches {
+    'chunks: while start < n_batches {
         control.check()?;
         let end = (start + chunk).min(n_batches);
-        let outs: Vec<BatchOut> = (start..end)
+        let batch = |b: u64, stop_at: Option<usize>| {
+            let count = BATCH.min(photons - b * BATCH);
+            let mut rng = Stream::new(seed, band, PHOTON_STREAM | tag | b);
+            let aim = emission.aim.as_ref();
+            trace_batch(
+                scene, photons, count, mode, targets, aim, stop_at, &mut rng, control,
+            )
+        };
+        let outs: Vec<(u64, BatchOut)> = (start..end)
             .into_par_iter()
             .map(|b| {
-                let count = BATCH.min(photons - b * BATCH);
-                let mut rng = Stream::new(seed, band, PHOTON_STREAM | tag | b);
-                let o = trace_batch(scene, photons, count, mode, targets, &mut rng, control);
-                control.add_done(count);
-                o
+                let o = batch(b, None);
+                control.add_done(o.traced);
+                (b, o)
             })
             .collect();
-        for o in outs {
+        for (b, mut o) in outs {
+            let in_batch: u64 = o.volume.iter().map(|v| v.len() as u64).sum();
+            let last = match emission.stored_cap {
+                Some(cap) if stored + in_batch >= cap => {
+                    // the budget is reached inside this batch: trace it again (same stream)
+                    // up to the photon that reaches it, so the maps overshoot by less than
+                    // one photon's events and the thread count does not matter
+                    o = batch(b, Some((cap - stored) as usize));
+                    true
+                }
+                _ => false,
+            };
             for (v, ov) in volume.iter_mut().zip(o.volume) {
+                stored += ov.len() as u64;
                 v.extend_from_slice(&ov);
             }
             surface.extend_from_slice(&o.surface);
             ledger.add(&o.ledger);
+            emitted += o.traced;
+            if last {
+                break 'chunks;
+            }
+        }
+        if let (Some(cap), 0) = (emission.stored_cap, start) {
+            // after the first chunk, reserve each map's share of the budget (+5 %) at once:
+            // growing by doubling would briefly hold up to 3× the final map
+            for v in volume.iter_mut().filter(|v| !v.is_empty()) {
+                let share = cap as f64 * v.len() as f64 / stored.max(1) as f64;
+                v.reserve_exact((1.05 * share) as usize + BATCH as usize);
+            }
         }
         start = end;
     }
     control.check()?;
+    if emitted > 0 && emitted < photons {
+        // powers were Φ / photons; the estimate needs Φ / emitted
+        let f = photons as f64 / emitted as f64;
+        for p in volume.iter_mut().flatten().chain(surface.iter_mut()) {
+            p.power *= f as f32;
+        }
+        ledger.scale(f);
+    }
     let trace_seconds = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let volume: Vec<PhotonMap> = volume.into_iter().map(PhotonMap::build).collect();
@@ -326,7 +435,7 @@ pub fn trace_photons_with(
     Ok(PhotonMaps {
         volume,
         surface,
-        emitted: photons,
+        emitted,
         ledger,
         trace_seconds,
         build_seconds: t1.elapsed().as_secs_f64(),
@@ -352,16 +461,12 @@ pub fn trace_camera_maps(
         volume: false,
         surface: true,
     };
-    let mut maps = trace_photons_with(
-        scene,
-        settings.volume_photons,
-        mode,
-        vol_only,
-        tag,
-        seed,
-        band,
-        control,
-    )?;
+    let emission = Emission {
+        photons: settings.volume_photons,
+        stored_cap: (settings.volume_stored > 0).then_some(settings.volume_stored),
+        aim: Aim::new(scene, settings.aim),
+    };
+    let mut maps = trace_emission(scene, &emission, mode, vol_only, tag, seed, band, control)?;
     let surf = trace_photons_with(
         scene,
         settings.photons,
@@ -373,6 +478,7 @@ pub fn trace_camera_maps(
         control,
     )?;
     maps.surface = surf.surface;
+    maps.emitted += surf.emitted;
     // the volume-only trace stores nothing on surfaces: its ledger's surface entry is 0
     maps.ledger.stored_surface = surf.ledger.stored_surface;
     maps.trace_seconds += surf.trace_seconds;

@@ -137,7 +137,7 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
         let maps = trace_pass(scene, settings, control, pass)?;
         stats.seconds_photons += maps.trace_seconds;
         stats.seconds_build += maps.build_seconds;
-        stats.photons_emitted += settings.volume_photons + settings.photons;
+        stats.photons_emitted += maps.emitted;
         stats.photons_stored += maps.stored() as u64;
         stats.photon_map_bytes = stats.photon_map_bytes.max(maps.bytes() as u64);
         let mut vpm = pass_estimator(scene, settings, &maps);

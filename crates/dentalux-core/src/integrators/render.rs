@@ -64,6 +64,9 @@ impl Integrator {
     }
 }
 
+/// Default of [`Settings::aim`]: half the volume pass's photons aimed at the media.
+pub const DEFAULT_AIM: f64 = 0.5;
+
 /// Render settings (see docs/render-contract.md; `None` = derive from the scene).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
@@ -73,8 +76,16 @@ pub struct Settings {
     pub spp: u32,
     /// Photons emitted for the surface photon map.
     pub photons: u64,
-    /// Photons emitted for the volume photon maps.
+    /// Photons emitted for the volume photon maps (with `volume_stored`: at most this many).
     pub volume_photons: u64,
+    /// Photons the volume maps of a pass should hold (0: no budget). Photons are emitted until
+    /// the maps hold at least this many (the paper counts its
+    /// 100 000 000 photons this way) or `volume_photons` have been emitted; powers are
+    /// normalised by the number actually emitted.
+    pub volume_stored: u64,
+    /// Fraction of the volume pass's photons aimed at the scattering media's bounding
+    /// spheres, in [0, 1) (`integrators::aim`; unbiased mixture). 0: emit as the lights do.
+    pub aim: f64,
     /// Photons per density estimate.
     pub k: usize,
     /// Largest gathering radius [mm].
@@ -109,6 +120,8 @@ impl Default for Settings {
             spp: 16,
             photons: 200_000,
             volume_photons: 1_000_000,
+            volume_stored: 0,
+            aim: DEFAULT_AIM,
             k: 64,
             radius: None,
             step: None,
@@ -146,6 +159,7 @@ impl Settings {
             }
         }
         crate::error::check_range("settings.alpha", self.alpha, 0.0, true, 1.0, true, "")?;
+        crate::error::check_range("settings.aim", self.aim, 0.0, false, 1.0, true, "")?;
         crate::error::check_range(
             "settings.kernel_layer",
             self.kernel_layer,

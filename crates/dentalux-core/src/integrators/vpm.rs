@@ -564,7 +564,7 @@ pub fn render(
             seconds_photons: maps.trace_seconds,
             seconds_build: maps.build_seconds,
             seconds_camera: t0.elapsed().as_secs_f64(),
-            photons_emitted: settings.volume_photons + settings.photons,
+            photons_emitted: maps.emitted,
             photons_stored: maps.stored() as u64,
             bytes_per_photon: PHOTON_BYTES as u64,
             photon_map_bytes: maps.bytes() as u64,

@@ -1,0 +1,202 @@
+//! How the volume pass emits: aimed emission (integrators/aim.rs) must keep every map's
+//! expected power while putting more photons into small media, and a stored-photon budget
+//! (`Emission::stored_cap`) must normalise powers by the photons actually emitted and give
+//! the same maps whatever the thread count.
+
+use dentalux_core::camera::Camera;
+use dentalux_core::control::Control;
+use dentalux_core::geometry::shapes::{Quad, Sphere};
+use dentalux_core::geometry::Vec3;
+use dentalux_core::integrators::aim::Aim;
+use dentalux_core::integrators::photon_trace::{
+    trace_emission, Emission, PhotonMaps, StoreMode, Targets,
+};
+use dentalux_core::lights::Light;
+use dentalux_core::medium::Medium;
+use dentalux_core::phase::PhaseFunction;
+use dentalux_core::scene::{Boundary, Geometry, Scene, ShapeInstance};
+use dentalux_core::surface::Surface;
+use std::f64::consts::PI;
+
+const VOLUME: Targets = Targets {
+    volume: true,
+    surface: false,
+};
+
+fn medium(mua: f64, mus: f64, g: f64, n: f64) -> Medium {
+    let phase = PhaseFunction::hg_with_isotropic(g, 0.0).unwrap();
+    Medium::new("", mua, mus, n, phase).unwrap()
+}
+
+fn shape(g: Geometry, b: Boundary) -> ShapeInstance {
+    ShapeInstance::new("shape", g, None, b).unwrap()
+}
+
+/// A 2 mm sphere of a refracting scattering medium standing 30 mm from a quad light over a
+/// large grey floor: few of the light's photons reach it directly, some by the floor.
+fn small_medium_scene() -> Scene {
+    let floor = shape(
+        Geometry::Quad(Quad {
+            corner: Vec3::new(-100.0, -100.0, 0.0),
+            u: Vec3::new(200.0, 0.0, 0.0),
+            v: Vec3::new(0.0, 200.0, 0.0),
+        }),
+        Boundary::Opaque { surface: 0 },
+    );
+    let ball = shape(
+        Geometry::Sphere(Sphere {
+            center: Vec3::new(10.0, 0.0, 2.0),
+            radius: 2.0,
+        }),
+        Boundary::Dielectric {
+            inside: 1,
+            outside: 0,
+        },
+    );
+    let light = Light::Quad {
+        corner: Vec3::new(-5.0, 5.0, 30.0),
+        u: Vec3::new(10.0, 0.0, 0.0),
+        v: Vec3::new(0.0, -10.0, 0.0),
+        radiance: 1.0,
+    };
+    let camera = Camera::new(Vec3::new(0.0, -40.0, 20.0), Vec3::ZERO, Vec3::Z, 40.0, 4, 4).unwrap();
+    Scene::new(
+        camera,
+        vec![medium(0.0, 0.0, 0.0, 1.0), medium(0.05, 2.0, 0.5, 1.4)],
+        vec![Surface::Lambertian { reflectance: 0.7 }],
+        vec![floor, ball],
+        vec![light],
+        0,
+    )
+    .unwrap()
+}
+
+fn trace(scene: &Scene, emission: &Emission, tag: u64) -> PhotonMaps {
+    trace_emission(
+        scene,
+        emission,
+        StoreMode::All,
+        VOLUME,
+        tag << 32,
+        9,
+        0,
+        &Control::new(),
+    )
+    .unwrap()
+}
+
+/// Mean and standard error over independent repetitions.
+fn mean_se(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
+    (m, (var / n).sqrt())
+}
+
+/// Aimed emission (80 % into the sphere's cone) stores the same expected power in the
+/// medium as the light's own emission, with many more photons per emitted photon.
+#[test]
+fn aimed_emission_keeps_the_stored_power() {
+    let scene = small_medium_scene();
+    let aim = Aim::new(&scene, 0.8).expect("the ball is a target");
+    assert_eq!(aim.targets(), 1);
+    let reps = 12;
+    let run = |aim: Option<Aim>, photons: u64| {
+        let e = Emission {
+            photons,
+            stored_cap: None,
+            aim,
+        };
+        let (mut power, mut count) = (Vec::new(), 0usize);
+        for r in 0..reps {
+            let maps = trace(&scene, &e, r + 1);
+            power.push(maps.ledger.stored_volume[1]);
+            count += maps.volume[1].len();
+            assert!(
+                (maps.volume[1].total_power() - maps.ledger.stored_volume[1]).abs()
+                    < 1e-4 * maps.ledger.stored_volume[1]
+            );
+        }
+        (mean_se(&power), count)
+    };
+    let ((plain, se_p), n_plain) = run(None, 200_000);
+    let ((aimed, se_a), n_aimed) = run(Some(aim), 50_000);
+    let se = (se_p * se_p + se_a * se_a).sqrt();
+    eprintln!(
+        "stored power: light's emission {plain:.5} ± {se_p:.5} ({n_plain} photons), \
+         aimed {aimed:.5} ± {se_a:.5} ({n_aimed} photons from a quarter of the emission)"
+    );
+    assert!(
+        (aimed - plain).abs() < 4.0 * se,
+        "{aimed} vs {plain} ± {se}"
+    );
+    // a quarter of the photons emitted, yet more stored: the point of aiming
+    assert!(n_aimed > 2 * n_plain, "{n_aimed} vs {n_plain}");
+    // without a scattering medium there is nothing to aim at
+    let mut clear = scene.clone();
+    clear.media[1] = medium(0.05, 0.0, 0.0, 1.4);
+    assert!(Aim::new(&clear, 0.9).is_none());
+    assert!(Aim::new(&scene, 0.0).is_none());
+}
+
+/// A point light in an infinite medium of albedo a: the maps hold Φ a/(1 − a) of stored
+/// power whatever the number of photons (closed form). With a budget of stored photons the
+/// emission stops at the first batch that reaches it, the powers are normalised by the
+/// photons emitted, and the maps are the same with 1 or 2 threads.
+#[test]
+fn stored_budget_normalises_and_ignores_threads() {
+    let a = 0.9;
+    let speck = shape(
+        Geometry::Sphere(Sphere {
+            center: Vec3::splat(1e4),
+            radius: 1.0,
+        }),
+        Boundary::Opaque { surface: 0 },
+    );
+    let camera = Camera::new(Vec3::new(0.0, -5.0, 0.0), Vec3::ZERO, Vec3::Z, 40.0, 4, 4).unwrap();
+    let scene = Scene::new(
+        camera,
+        vec![medium(1.0 - a, a, 0.3, 1.0)],
+        vec![Surface::Black],
+        vec![speck],
+        vec![Light::Point {
+            position: Vec3::ZERO,
+            intensity: 2.0,
+        }],
+        0,
+    )
+    .unwrap();
+    let cap = 300_000u64;
+    let emission = Emission {
+        photons: 10_000_000,
+        stored_cap: Some(cap),
+        aim: None,
+    };
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| trace(&scene, &emission, 0))
+    };
+    let one = run(1);
+    let two = run(2);
+    let stored = one.volume[0].len() as u64;
+    assert_eq!(stored, two.volume[0].len() as u64);
+    assert_eq!(one.emitted, two.emitted);
+    assert_eq!(one.ledger, two.ledger);
+    // stopped at the photon that reached the budget: over by less than one photon's events
+    // (P(more than 300 events) = 0.9³⁰⁰ ≈ 2e-14)
+    assert!(stored >= cap && stored < cap + 300, "{stored}");
+    assert!(one.emitted < emission.photons && one.emitted % 4096 != 0);
+    let phi = 4.0 * PI * 2.0;
+    let expect = phi * a / (1.0 - a);
+    let se = phi * a.sqrt() / (1.0 - a) / (one.emitted as f64).sqrt();
+    let got = one.volume[0].total_power();
+    eprintln!(
+        "budget {cap}: {stored} stored from {} photons; power {got:.3} vs {expect:.3} ± {se:.3}",
+        one.emitted
+    );
+    assert!((got - expect).abs() < 4.0 * se, "{got} vs {expect} ± {se}");
+    assert!((one.ledger.emitted - phi).abs() < 1e-6 * phi);
+}
