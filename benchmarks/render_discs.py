@@ -70,7 +70,7 @@ def render(scene: dict, res, **kw):
 
 def passes(scene: dict, res, n: int, seed0: int, photons: int, k: int, spp: int,
            surface: int, integrator: str = "vpm", budget: float | None = None,
-           on_pass=None):
+           on_pass=None, **options):
     """Average ``n`` independent passes (seeds seed0, seed0 + 1, ...; each its own photon maps
     and camera samples). Stops early when the wall time so far plus one more pass would pass
     ``budget``. ``on_pass(count, seconds, mean image)`` after each pass. Returns (mean image,
@@ -82,7 +82,7 @@ def passes(scene: dict, res, n: int, seed0: int, photons: int, k: int, spp: int,
         if budget is not None and done and wall * (done + 1) / done > budget:
             break
         img, _, t = render(scene, res, integrator=integrator, spp=spp, seed=seed0 + p,
-                           volume_photons=photons, photons=surface, k=k)
+                           volume_photons=photons, photons=surface, k=k, **options)
         wall += t
         done += 1
         total = img.copy() if total is None else total + img

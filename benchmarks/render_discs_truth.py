@@ -43,6 +43,8 @@ def main() -> None:
     ap.add_argument("--configs", default="4000000:200:4,8000000:100:4,16000000:50:4")
     ap.add_argument("--ppm", default="", help="photons:k:spp:alpha,... (ppm integrator)")
     ap.add_argument("--surface-photons", type=int, default=200_000)
+    ap.add_argument("--aim", type=float, default=None,
+                    help="fraction of volume photons aimed at the discs (default: the core's)")
     args = ap.parse_args()
     res = tuple(int(v) for v in args.resolution.split("x"))
     scene = scene_dict(False)
@@ -70,6 +72,7 @@ def main() -> None:
     print("| photons/pass | k | spp | passes | seconds | rel. RMSE vs truth | mean vs truth "
           "| volpath s | volpath-nee s | speed-up vs volpath |")
     print("|---|---|---|---|---|---|---|---|---|---|")
+    aim = {} if args.aim is None else {"aim": args.aim}
     for c, conf in enumerate(filter(None, args.ppm.split(","))):
         photons, k, spp, alpha = conf.split(":")
         n = 1
@@ -77,7 +80,7 @@ def main() -> None:
             img, _, wall = render(scene, res, integrator="ppm", spp=int(spp), seed=5000 + c,
                                   volume_photons=int(float(photons)),
                                   photons=args.surface_photons, k=int(k), passes=n,
-                                  alpha=float(alpha))
+                                  alpha=float(alpha), **aim)
             e = err(img)
             t1, t2 = cost(e) if e > 0 else (float("inf"),) * 2
             print(f"| ppm {photons} a={alpha} | {k} | {spp} | {n} | {wall:.1f} | {e:.4f} "
@@ -99,7 +102,7 @@ def main() -> None:
                   f"| {t1 / wall:.0f}x |", flush=True)
 
         passes(scene, res, 4096, 3000 + 100 * c, photons, k, spp, args.surface_photons,
-               budget=args.budget, on_pass=report)
+               budget=args.budget, on_pass=report, **aim)
 
 
 if __name__ == "__main__":

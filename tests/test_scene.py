@@ -545,7 +545,8 @@ def test_render_api_with_fake_core(fake_core):
     assert np.all(result.radiance[..., 0] == 605) and np.all(result.radiance[..., 1] == 450)
     scene0, settings0 = fake_core.calls[0]
     assert settings0 == {"integrator": "pm", "spp": 2, "photons": 100, "volume_photons": 5,
-                         "volume_stored": 0, "aim": 0.5, "k": 8, "radius": 1.5, "step": None, "seed": 7, "band": 605,
+                         "volume_stored": 0, "aim": 0.0, "k": 8, "radius": 1.5,
+                         "step": None, "seed": 7, "band": 605,
                          "threads": None, "max_depth": 64, "passes": 1, "alpha": 0.7,
                          "final_gather": False, "kernel_layer": 0.3}
     # red wall at 605 nm from its reflectance table

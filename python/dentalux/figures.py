@@ -134,7 +134,7 @@ def match_enamel_scale(target_tt: float, thickness_mm: float, enamel) -> float:
 
 def _render_figure(name: str, scene: dict, out: Path, quality: Quality, integrator: str = "vpm",
                    regions: dict | None = None, extra: dict | None = None,
-                   bands=PAPER_BANDS, **overrides) -> dict:
+                   bands=PAPER_BANDS, white: float | None = None, **overrides) -> dict:
     sc = scene_from_dict(scene)
     t0 = time.perf_counter()
     settings = dict(spp=quality.spp, photons=quality.photons,
@@ -147,7 +147,7 @@ def _render_figure(name: str, scene: dict, out: Path, quality: Quality, integrat
     result = render(sc, integrator=integrator, bands=bands, seed=1, correlated_bands=True,
                     **settings)
     folder = out / name
-    summary = write_render_outputs(sc, result, folder, regions=regions)
+    summary = write_render_outputs(sc, result, folder, regions=regions, white=white)
     summary.update({"figure": name, "quality": asdict(quality), **(extra or {})})
     summary["timings"]["figure_s"] = time.perf_counter() - t0
     summary["peak_memory_bytes"] = peak_memory_bytes()
@@ -235,7 +235,7 @@ def cornell_teeth_scene(quality: Quality, box_mm: float = 60.0) -> dict:
 
 
 def _teeth_settings(quality: Quality) -> dict:
-    return {"volume_photons": quality.teeth_volume_photons,
+    return {"volume_photons": quality.teeth_volume_photons, "aim": 0.5,
             "volume_stored": quality.teeth_volume_stored, "radius": quality.teeth_radius_mm,
             "spp": quality.teeth_spp, "k": min(quality.k, 400)}
 
@@ -265,6 +265,28 @@ def fig5(out: Path, quality: Quality) -> dict:
                           extra={"anisotropy_scaling": scaling}, **_teeth_settings(quality))
 
 
+def lights_45_0(centre, dist_mm: float, elevation_deg: float, size_mm: float,
+                radiance: float) -> list[dict]:
+    """Two square D65 quad lights facing ``centre`` from 45° left and right of the -z axis
+    (the camera's direction), raised by ``elevation_deg``, ``dist_mm`` away."""
+    e = math.radians(elevation_deg)
+    lights = []
+    for side in (-1.0, 1.0):
+        # unit direction from the light towards the centre
+        d = np.array([-side * math.cos(e) * math.sqrt(0.5), -math.sin(e),
+                      math.cos(e) * math.sqrt(0.5)])
+        u = np.array([1.0, 0.0, side]) / math.sqrt(2.0)  # horizontal, across d
+        v = np.cross(d, u)
+        if np.dot(np.cross(u, v), d) < 0:  # the emitting side (u × v) must face the centre
+            u = -u
+        u, v = u * size_mm, v / np.linalg.norm(v) * size_mm
+        corner = np.asarray(centre, float) - dist_mm * d - (u + v) / 2
+        lights.append({"type": "quad", "name": f"key {'left' if side < 0 else 'right'}",
+                       "corner": corner.tolist(), "u": u.tolist(), "v": v.tolist(),
+                       "radiance": radiance, "spectrum": "D65"})
+    return lights
+
+
 def crown_scene(quality: Quality) -> tuple[dict, dict]:
     """A natural incisor (left) and the same tooth whose enamel volume is replaced by the
     biomaterial: a full-coverage crown on the natural dentin (right). Returns the scene and
@@ -291,14 +313,16 @@ def crown_scene(quality: Quality) -> tuple[dict, dict]:
             tooth(-6.5, "enamel"),
             tooth(6.5, "crown"),
         ],
-        "lights": [{"type": "quad", "name": "key", "corner": [-40.0, 40.0, -60.0],
-                    "u": [80.0, 0.0, 0.0], "v": [0.0, 0.0, 40.0], "radiance": 3.0,
-                    "spectrum": "D65"}],
+        # 45°/0° geometry, as a dental spectrophotometer measures: two 16 mm square lights
+        # 45° left and right of the labial faces' normal, 15° above it, 50 mm away; the
+        # mirror highlights fall on the mesial and distal slopes of the curved faces, off the
+        # measured middle third (one large light above the camera put its highlight there)
+        "lights": lights_45_0([0.0, 5.0, -3.5], 50.0, 15.0, 16.0, 16.0),
     }
     # pinhole projection of the labial face (z ≈ -3.5 mm after the rotation) to pixels
     px_per_mm = (h / 2) / ((dist - 3.5) * math.tan(math.radians(fov / 2)))
 
-    def rect(x_mm, y_mm=5.0, half_mm=1.5):
+    def rect(x_mm, y_mm=5.0, half_mm=1.25):
         cx, cy = w / 2 + x_mm * px_per_mm, h / 2 - (y_mm - eye_y) * px_per_mm
         r = half_mm * px_per_mm
         return [int(cx - r), int(cy - r), int(cx + r) + 1, int(cy + r) + 1]
@@ -306,14 +330,40 @@ def crown_scene(quality: Quality) -> tuple[dict, dict]:
     return scene, {"natural": rect(-6.5), "crown": rect(6.5)}
 
 
+def white_tile(scene: dict, regions: dict, quality: Quality, z_mm: float = -3.5) -> dict:
+    """Calibrate as a spectrophotometer does: the same scene without the teeth, a white
+    Lambertian tile (reflectance 1) in the plane of the labial faces, rendered with `pm`
+    (opaque surfaces only); returns the tile's radiance relative to the light's spectrum,
+    averaged over the measured regions and bands: L* = 100 in the crown figure."""
+    from dentalux.outputs import colour_inputs
+
+    d = copy.deepcopy(scene)
+    d["shapes"] = [s for s in d["shapes"] if s["type"] != "tooth"]
+    d["media"] = {}
+    d["surfaces"]["white_tile"] = {"type": "lambertian", "reflectance": 1.0}
+    d["shapes"].append({"type": "quad", "name": "white tile", "corner": [-30.0, -30.0, z_mm],
+                        "u": [60.0, 0.0, 0.0], "v": [0.0, 60.0, 0.0], "surface": "white_tile"})
+    sc = scene_from_dict(d)
+    result = render(sc, integrator="pm", bands=PAPER_BANDS, seed=2, spp=quality.teeth_spp,
+                    photons=quality.photons // 4, progress=False)
+    divisor, _, _ = colour_inputs(sc, PAPER_BANDS)
+    rel = result.radiance / divisor
+    values = [rel[y0:y1, x0:x1].mean(axis=(0, 1)) for x0, y0, x1, y1 in regions.values()]
+    per_band = np.mean(values, axis=0)
+    return {"white": float(per_band.mean()), "per_band": per_band.tolist(), "z_mm": z_mm}
+
+
 def fig_crown(out: Path, quality: Quality) -> dict:
     from dentalux.color import delta_e00
     from dentalux.dental import verdict
 
     scene, regions = crown_scene(quality)
+    tile = white_tile(scene, regions, quality)
     scaling = lower_anisotropy(scene, quality)
     summary = _render_figure("crown_vs_natural", scene, out, quality, regions=regions,
-                             extra={"anisotropy_scaling": scaling}, **_teeth_settings(quality))
+                             white=tile["white"],
+                             extra={"anisotropy_scaling": scaling, "white_tile": tile},
+                             **_teeth_settings(quality))
     labs = {k: np.array(v["lab"]) for k, v in summary["colour"]["regions"].items()}
     de = float(delta_e00(labs["natural"], labs["crown"]))
     summary["delta_e00"] = de

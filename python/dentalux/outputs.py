@@ -59,9 +59,13 @@ def colour_inputs(scene: Scene, bands: list[float]) -> tuple[np.ndarray, str, fl
 
 
 def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None = None,
-                         scene_file: str | None = None, warn=None) -> dict:
+                         scene_file: str | None = None, warn=None,
+                         white: float | None = None) -> dict:
     """Write radiance.npy, previews, colour images and render.json for a RenderResult;
-    returns the render.json dictionary."""
+    returns the render.json dictionary. ``white``: the radiance (relative to the light's
+    spectrum) that counts as L* = 100, e.g. a white tile measured in the same geometry; the
+    image is then exposed so that this white is display white. Default: the brightest
+    light's radiance, with automatic exposure."""
     from dentalux.color import write_images
 
     out = Path(out)
@@ -85,13 +89,14 @@ def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None =
         "stats": result.stats["bands"],
         "files": files,
     }
-    divisor, illuminant, white = colour_inputs(scene, result.bands)
+    divisor, illuminant, light_white = colour_inputs(scene, result.bands)
     if regions is None and tuple(result.radiance.shape[1::-1]) == tuple(scene.resolution):
         regions = scene.description.get("regions") or None
     try:
         summary["colour"] = write_images(result.radiance / divisor, result.bands, out,
                                          illuminant=illuminant, regions=regions,
-                                         exposure=None, white=white)
+                                         exposure=None if white is None else 0.0,
+                                         white=light_white if white is None else white)
     except ValueError as exc:  # e.g. too few bands for a colour image
         summary["colour_error"] = str(exc)
         if warn:

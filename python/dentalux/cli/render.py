@@ -56,7 +56,7 @@ def render_command(
         help="photons the volume maps should hold: emit until then (at most volume-photons)"),
     aim: float = typer.Option(
         None, help="fraction of the volume photons aimed at the media, in [0, 1) "
-                   "(default 0.5; unbiased)"),
+                   "(default 0; unbiased; pair with --volume-stored)"),
     bands: str = typer.Option(None, help="wavelengths [nm], e.g. 450,540,605"),
     resolution: str = typer.Option(None, help="WIDTHxHEIGHT in pixels, e.g. 128x96"),
     seed: int = typer.Option(None, help="random seed (default: the scene's, else 1)"),

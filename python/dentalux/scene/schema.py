@@ -39,7 +39,7 @@ RENDER_KEYS = {
     "photons": 200_000,
     "volume_photons": 1_000_000,
     "volume_stored": 0,
-    "aim": 0.5,
+    "aim": 0.0,
     "k": 64,
     "radius": None,
     "step": None,
