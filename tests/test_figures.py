@@ -13,7 +13,8 @@ from dentalux.figures import (
     transmittance_d65,
 )
 
-TINY = Quality("tiny", (24, 18), 1, 2_000, 20_000, 0.5, (12, 9), 4, 16, 0.5, 20_000, 1.0, 1)
+TINY = Quality("tiny", (24, 18), 1, 2_000, 20_000, 0.5, (12, 9), 4, 16, 0.5, 500_000, 1.0, 1,
+               teeth_volume_stored=20_000)
 
 
 def test_enamel_scale_matches_the_biomaterial_transmittance():
@@ -42,7 +43,7 @@ def test_tiny_figures_render_with_colour_and_settings(tmp_path, figure):
         assert radiance.mean() > 0
         on_disk = json.loads((folder / "figure.json").read_text())
         assert on_disk["quality"]["name"] == "tiny"
-        assert on_disk["settings"]["volume_photons"] == 20_000
+        assert on_disk["settings"]["volume_stored"] == 20_000
     if figure == "crown":
         scaling = json.loads((tmp_path / "crown_vs_natural" / "figure.json").read_text())[
             "anisotropy_scaling"]

@@ -35,12 +35,15 @@ TICKS = 1000
 
 
 def photons_traced(settings: dict) -> int:
-    """Photons one pass of one band traces: none for the path tracers, surface photons for
-    ``pm``, surface plus volume photons for the volume integrators."""
+    """Photons one pass of one band traces (the progress bar's unit): none for the path
+    tracers, surface photons for ``pm``, surface plus volume photons for the volume
+    integrators (volume photons stored when ``volume_stored`` sets a budget)."""
     if settings["integrator"] in PATH_TRACERS:
         return 0
     volume = settings["integrator"] in ("vpm", "vpm-full", "ppm")
-    return settings["photons"] + (settings["volume_photons"] if volume else 0)
+    # with a stored-photon budget the core counts photons stored, not emitted
+    per_pass = settings.get("volume_stored") or settings["volume_photons"]
+    return settings["photons"] + (per_pass if volume else 0)
 
 
 @dataclass

@@ -382,7 +382,12 @@ pub fn trace_emission(
             .into_par_iter()
             .map(|b| {
                 let o = batch(b, None);
-                control.add_done(o.traced);
+                // progress: photons emitted, or with a budget photons stored (the emitted
+                // count is not known in advance)
+                control.add_done(match emission.stored_cap {
+                    Some(_) => o.volume.iter().map(|v| v.len() as u64).sum(),
+                    None => o.traced,
+                });
                 (b, o)
             })
             .collect();
