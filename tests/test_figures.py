@@ -48,7 +48,7 @@ def test_tiny_figures_render_with_colour_and_settings(tmp_path, figure):
         scaling = json.loads((tmp_path / "crown_vs_natural" / "figure.json").read_text())[
             "anisotropy_scaling"]
         assert set(scaling) == {"enamel", "dentin", "crown"}
-        assert scaling["dentin"]["scaling"][-1]["similarity_g"] == TINY.teeth_similarity_g
+        assert scaling["dentin"]["scaling"][-1]["similarity_g"] == TINY.similarity_g
         crown = report["figures"]["crown"][0]
         assert np.isfinite(crown["delta_e00"]) and crown["delta_e00"] >= 0
         assert crown["verdict"] in ("imperceptible", "acceptable", "unacceptable")

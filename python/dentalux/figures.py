@@ -68,9 +68,10 @@ class Quality:
     # Volume photons stored per band in the teeth scenes (the paper counts its 100 M photons
     # as collected, i.e. stored); `teeth_volume_photons` then caps the photons emitted.
     teeth_volume_stored: int = 0
-    # Teeth scenes: anisotropy lowered to this g by the similarity relation (μs' kept), as the
-    # paper scaled its teeth's anisotropy; None renders the library's g (docs/figures.md).
-    teeth_similarity_g: float | None = 0.75
+    # Tissue figures (Fig. 4's enamel, Fig. 5, the crown): anisotropy lowered to this g by the
+    # similarity relation (μs' kept), as the paper scaled its teeth's anisotropy; None
+    # renders the library's g (docs/figures.md).
+    similarity_g: float | None = 0.75
 
 
 QUALITIES = {
@@ -183,6 +184,9 @@ def fig3(out: Path, quality: Quality, thickness_mm: float) -> dict:
 def fig4(out: Path, quality: Quality, thickness_mm: float) -> dict:
     bio = materials.get("biomaterial-table1")
     enamel = materials.get("enamel")
+    if quality.similarity_g is not None:
+        # lower g first, so the transparency is matched for the material that is rendered
+        enamel = enamel.similar(quality.similarity_g, note="figures: fewer photons")
     target = transmittance_d65(bio, thickness_mm)
     s = match_enamel_scale(target, thickness_mm, enamel)
     scaled = enamel.scaled(
@@ -251,10 +255,10 @@ def _teeth_settings(quality: Quality) -> dict:
 
 def lower_anisotropy(scene: dict, quality: Quality, bands=PAPER_BANDS) -> dict:
     """Replace every library medium of ``scene`` by its similarity-scaled copy at
-    ``quality.teeth_similarity_g`` (in place); returns each medium's scaling record for the
+    ``quality.similarity_g`` (in place); returns each medium's scaling record for the
     figure's JSON. With g ≈ 0.95 (dentin) a phase-weighted estimate over k photons counts
     about k (1 − g²)² / (1 + g²) of them (k / 200): the grain the paper avoided the same way."""
-    g = quality.teeth_similarity_g
+    g = quality.similarity_g
     if g is None:
         return {}
     records = {}

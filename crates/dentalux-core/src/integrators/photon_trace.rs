@@ -419,7 +419,8 @@ pub fn trace_emission(
             // growing by doubling would briefly hold up to 3× the final map
             for v in volume.iter_mut().filter(|v| !v.is_empty()) {
                 let share = cap as f64 * v.len() as f64 / stored.max(1) as f64;
-                v.reserve_exact((1.05 * share) as usize + BATCH as usize);
+                let target = (1.05 * share) as usize + BATCH as usize;
+                v.reserve_exact(target.saturating_sub(v.len()));
             }
         }
         start = end;
