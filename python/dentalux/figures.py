@@ -87,6 +87,8 @@ QUALITIES = {
 # Photons emitted per photon a figure asks to store, at most (a guard: a medium the light
 # hardly reaches would otherwise keep the photon pass running).
 EMIT_CAP = 25
+# Fraction of a figure's volume photons aimed at its media (`aim`).
+FIGURE_AIM = 0.5
 
 
 def _media_table(material, bands) -> dict:
@@ -148,7 +150,7 @@ def _render_figure(name: str, scene: dict, out: Path, quality: Quality, integrat
     t0 = time.perf_counter()
     settings = dict(spp=quality.spp, photons=quality.photons,
                     volume_photons=EMIT_CAP * quality.volume_photons,
-                    volume_stored=quality.volume_photons, aim=0.5, k=quality.k,
+                    volume_stored=quality.volume_photons, aim=FIGURE_AIM, k=quality.k,
                     radius=quality.radius_mm)
     settings.update(overrides)
     if integrator in PATH_TRACERS:
@@ -248,7 +250,7 @@ def cornell_teeth_scene(quality: Quality, box_mm: float = 60.0) -> dict:
 
 
 def _teeth_settings(quality: Quality) -> dict:
-    return {"volume_photons": quality.teeth_volume_photons, "aim": 0.5,
+    return {"volume_photons": quality.teeth_volume_photons, "aim": FIGURE_AIM,
             "volume_stored": quality.teeth_volume_stored, "radius": quality.teeth_radius_mm,
             "spp": quality.teeth_spp, "k": min(quality.k, 400)}
 

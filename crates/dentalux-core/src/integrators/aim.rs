@@ -141,11 +141,10 @@ impl Aim {
         };
         let w = self.fraction;
         let j_count = self.targets.len();
-        let cones: Vec<Option<(Vec3, f64)>> =
-            self.targets.iter().map(|t| Self::cone(o, t)).collect();
+        // cones are recomputed below rather than collected: this runs once per photon
         let d = if u3 < w {
             let j = ((u3 / w * j_count as f64) as usize).min(j_count - 1);
-            match cones[j] {
+            match Self::cone(o, &self.targets[j]) {
                 Some((axis, cos_max)) => {
                     let mu = 1.0 - u2[0] * (1.0 - cos_max);
                     direction_about(axis, mu, 2.0 * PI * u2[1])
@@ -159,9 +158,10 @@ impl Aim {
         if base <= 0.0 {
             return (Ray::new(o, d), 0.0);
         }
-        let aimed: f64 = cones
+        let aimed: f64 = self
+            .targets
             .iter()
-            .map(|c| match *c {
+            .map(|t| match Self::cone(o, t) {
                 Some((axis, cos_max)) if d.dot(axis) >= cos_max => {
                     1.0 / (2.0 * PI * (1.0 - cos_max))
                 }

@@ -164,6 +164,13 @@ struct BatchOut {
     traced: u64,
 }
 
+impl BatchOut {
+    /// Photons stored in the volume maps.
+    fn volume_len(&self) -> u64 {
+        self.volume.iter().map(|v| v.len() as u64).sum()
+    }
+}
+
 /// Trace one batch of `count` photons (aimed at the media when `aim` is given); with
 /// `stop_at`, stop after the photon whose events bring the batch's volume maps to that many.
 #[allow(clippy::too_many_arguments)]
@@ -174,7 +181,7 @@ fn trace_batch(
     mode: StoreMode,
     targets: Targets,
     aim: Option<&Aim>,
-    stop_at: Option<usize>,
+    stop_at: Option<u64>,
     rng: &mut Stream,
     control: &Control,
 ) -> BatchOut {
@@ -188,7 +195,8 @@ fn trace_batch(
     let led = &mut out.ledger;
     for _ in 0..count {
         if let Some(stop) = stop_at {
-            if out.volume.iter().map(Vec::len).sum::<usize>() >= stop {
+            // (the field, not `volume_len`: `out.ledger` is borrowed mutably above)
+            if out.volume.iter().map(|v| v.len() as u64).sum::<u64>() >= stop {
                 break;
             }
         }
@@ -370,7 +378,7 @@ pub fn trace_emission(
     'chunks: while start < n_batches {
         control.check()?;
         let end = (start + chunk).min(n_batches);
-        let batch = |b: u64, stop_at: Option<usize>| {
+        let batch = |b: u64, stop_at: Option<u64>| {
             let count = BATCH.min(photons - b * BATCH);
             let mut rng = Stream::new(seed, band, PHOTON_STREAM | tag | b);
             let aim = emission.aim.as_ref();
@@ -385,20 +393,19 @@ pub fn trace_emission(
                 // progress: photons emitted, or with a budget photons stored (the emitted
                 // count is not known in advance)
                 control.add_done(match emission.stored_cap {
-                    Some(_) => o.volume.iter().map(|v| v.len() as u64).sum(),
+                    Some(_) => o.volume_len(),
                     None => o.traced,
                 });
                 (b, o)
             })
             .collect();
         for (b, mut o) in outs {
-            let in_batch: u64 = o.volume.iter().map(|v| v.len() as u64).sum();
             let last = match emission.stored_cap {
-                Some(cap) if stored + in_batch >= cap => {
+                Some(cap) if stored + o.volume_len() >= cap => {
                     // the budget is reached inside this batch: trace it again (same stream)
                     // up to the photon that reaches it, so the maps overshoot by less than
                     // one photon's events and the thread count does not matter
-                    o = batch(b, Some((cap - stored) as usize));
+                    o = batch(b, Some(cap - stored));
                     true
                 }
                 _ => false,
