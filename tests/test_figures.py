@@ -95,3 +95,25 @@ def test_cli_figures(tmp_path):
         with pytest.raises(SystemExit) as exc:
             main(["figures", "--out", str(tmp_path), *bad])
         assert exc.value.code == 2
+
+
+def test_crown_regions_lie_on_the_teeth_they_name():
+    """The measured squares of the crown figure are on the right teeth: with the crown's
+    medium made black (μa 50 /mm) its square goes dark and the natural one does not. (The
+    squares were once mirrored: the camera sees +x on its left, and the labels were swapped.)"""
+    from dataclasses import replace
+
+    from dentalux.figures import QUALITIES, crown_scene
+    from dentalux.render import render
+    from dentalux.scene.load import scene_from_dict
+
+    q = replace(QUALITIES["preview"], resolution=(64, 48), tooth_resolution_mm=0.5)
+    scene, regions = crown_scene(q)
+    scene["media"]["crown"] = {"mua": 50.0, "mus": 0.0, "n": 1.54}
+    r = render(scene_from_dict(scene), integrator="vpm", bands=[540.0], spp=2, seed=1,
+               photons=20_000, volume_photons=20_000, progress=False)
+    img = r.radiance[..., 0]
+    mean = {k: float(img[y0:y1, x0:x1].mean()) for k, (x0, y0, x1, y1) in regions.items()}
+    # a black crown still shows its surface reflection (≈ 4.5 % at n 1.54), the natural
+    # tooth the light that comes back out of the dentin: several times brighter
+    assert mean["crown"] < 0.5 * mean["natural"], mean

@@ -34,6 +34,7 @@ from dentalux.outputs import peak_memory_bytes, write_render_outputs
 from dentalux.render import render
 from dentalux.scene.builtin import discs as discs_scene
 from dentalux.scene.load import scene_from_dict
+from dentalux.scene.project import square_region
 from dentalux.scene.schema import PATH_TRACERS
 from dentalux.slab import Layer, simulate
 
@@ -303,9 +304,9 @@ def lights_45_0(centre, dist_mm: float, elevation_deg: float, size_mm: float,
 
 
 def crown_scene(quality: Quality) -> tuple[dict, dict]:
-    """A natural incisor (left) and the same tooth whose enamel volume is replaced by the
-    biomaterial: a full-coverage crown on the natural dentin (right). Returns the scene and
-    the image regions (labial thirds of each crown) for the colour comparison."""
+    """A natural incisor (image left) and the same tooth whose enamel volume is replaced by
+    the biomaterial: a full-coverage crown on the natural dentin (image right). Returns the
+    scene and the image regions (labial thirds of each crown) for the colour comparison."""
     up = {"axis": [1.0, 0.0, 0.0], "angle_deg": -90.0}
     w, h = quality.resolution
 
@@ -325,8 +326,9 @@ def crown_scene(quality: Quality) -> tuple[dict, dict]:
         "shapes": [
             {"type": "quad", "name": "backdrop", "corner": [-60.0, -40.0, 15.0],
              "u": [120.0, 0.0, 0.0], "v": [0.0, 80.0, 0.0], "surface": "backdrop"},
-            tooth(-6.5, "enamel"),
-            tooth(6.5, "crown"),
+            # +x is on the image's left (see the regions below): natural left, crown right
+            tooth(6.5, "enamel"),
+            tooth(-6.5, "crown"),
         ],
         # 45°/0° geometry, as a dental spectrophotometer measures: two 16 mm square lights
         # 45° left and right of the labial faces' normal, 15° above it, 50 mm away; the
@@ -334,15 +336,13 @@ def crown_scene(quality: Quality) -> tuple[dict, dict]:
         # measured middle third (one large light above the camera put its highlight there)
         "lights": lights_45_0([0.0, 5.0, -3.5], 50.0, 15.0, 16.0, 16.0),
     }
-    # pinhole projection of the labial face (z ≈ -3.5 mm after the rotation) to pixels
-    px_per_mm = (h / 2) / ((dist - 3.5) * math.tan(math.radians(fov / 2)))
-
-    def rect(x_mm, y_mm=5.0, half_mm=1.25):
-        cx, cy = w / 2 + x_mm * px_per_mm, h / 2 - (y_mm - eye_y) * px_per_mm
-        r = half_mm * px_per_mm
-        return [int(cx - r), int(cy - r), int(cx + r) + 1, int(cy + r) + 1]
-
-    return scene, {"natural": rect(-6.5), "crown": rect(6.5)}
+    # the measured squares on the labial faces (z ≈ -3.5 mm after the rotation), placed by
+    # the render's own camera: it looks along +z with +y up, so +x (the crown) is on the
+    # image's left. (Until 2026-12-01 the squares were placed as if +x were on the right,
+    # which swapped the two labels: the "darker crown" of earlier notes was the natural tooth.)
+    cam = scene["camera"]
+    return scene, {name: square_region(cam, [x, 5.0, -3.5], 1.25)
+                   for name, x in (("natural", 6.5), ("crown", -6.5))}
 
 
 def white_tile(scene: dict, regions: dict, quality: Quality, z_mm: float = -3.5) -> dict:

@@ -83,11 +83,51 @@ impl Camera {
         let sy = (1.0 - 2.0 * y / self.height as f64) * self.tan_half_fov;
         Ray::new(self.position, self.forward + self.right * sx + self.up * sy)
     }
+
+    /// The film position (x, y) in pixels of world point `p` [mm]: the inverse of
+    /// [`Self::ray`], so that `ray(x, y)` passes through `p`. `None` for points at or behind
+    /// the pinhole's plane. Image regions are placed with this (Python's
+    /// `dentalux.scene.project`), so they follow the same handedness as the render: with
+    /// `right = forward × up`, a camera looking along +z with +y up sees +x on the left.
+    pub fn project(&self, p: Vec3) -> Option<(f64, f64)> {
+        let d = p - self.position;
+        let depth = d.dot(self.forward);
+        if depth.is_nan() || depth <= 0.0 || !d.is_finite() {
+            return None;
+        }
+        let aspect = self.width as f64 / self.height as f64;
+        let sx = d.dot(self.right) / depth;
+        let sy = d.dot(self.up) / depth;
+        let x = (sx / (aspect * self.tan_half_fov) + 1.0) * 0.5 * self.width as f64;
+        let y = (1.0 - sy / self.tan_half_fov) * 0.5 * self.height as f64;
+        Some((x, y))
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn project_inverts_ray() {
+        let c = Camera::new(
+            Vec3::new(1.0, 2.0, -30.0),
+            Vec3::new(0.5, 1.0, 0.0),
+            Vec3::new(0.1, 1.0, 0.0),
+            33.0,
+            160,
+            90,
+        )
+        .unwrap();
+        for &(x, y) in &[(0.0, 0.0), (80.0, 45.0), (159.5, 3.25), (12.0, 88.0)] {
+            let r = c.ray(x, y);
+            let (px, py) = c.project(r.o + r.d * 7.3).unwrap();
+            assert!(
+                (px - x).abs() < 1e-9 && (py - y).abs() < 1e-9,
+                "{x},{y} -> {px},{py}"
+            );
+        }
+    }
 
     #[test]
     fn centre_and_corner_rays() {
@@ -101,6 +141,10 @@ mod tests {
         let r = c.ray(200.0, 50.0);
         assert!((r.d - Vec3::new(2.0, 0.0, -1.0).normalize()).length() < 1e-12);
         assert!(Camera::new(Vec3::ZERO, Vec3::Y, Vec3::Y, 40.0, 4, 4).is_err());
+        // looking along +z with +y up, +x is on the image's left (right = forward × up)
+        let c = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0, 64, 48).unwrap();
+        assert!(c.project(Vec3::new(1.0, 0.0, 10.0)).unwrap().0 < 32.0);
+        assert!(c.project(Vec3::new(0.0, 0.0, -1.0)).is_none());
         assert!(Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 0.0, 4, 4).is_err());
         assert!(Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0, 65536, 65536).is_err());
     }

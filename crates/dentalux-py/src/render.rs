@@ -614,6 +614,29 @@ fn stats_dict<'py>(py: Python<'py>, s: &Stats) -> PyResult<Bound<'py, PyDict>> {
 
 /// Render one band of a resolved scene (docs/render-contract.md): returns the radiance image
 /// (numpy float32, height × width) and a dict of statistics.
+/// Pixel positions (x, y) of world points [mm] on the film of the camera in `camera_json`
+/// (the render contract's `camera` object): the inverse of the core's camera rays, so image
+/// regions follow the render's own handedness. `None` for a point behind the camera.
+#[pyfunction]
+pub fn camera_project(
+    camera_json: &str,
+    points: Vec<[f64; 3]>,
+) -> PyResult<Vec<Option<(f64, f64)>>> {
+    let value: Value = serde_json::from_str(camera_json)
+        .map_err(|e| PyValueError::new_err(format!("camera JSON is malformed: {e}")))?;
+    let cam = Node {
+        v: &value,
+        path: "camera",
+    }
+    .obj()
+    .and_then(camera)
+    .map_err(runner::to_py_err)?;
+    Ok(points
+        .into_iter()
+        .map(|p| cam.project(Vec3::new(p[0], p[1], p[2])))
+        .collect())
+}
+
 #[pyfunction]
 #[pyo3(signature = (scene_json, settings_json, progress=None))]
 pub fn render_band<'py>(
