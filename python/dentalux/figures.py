@@ -236,9 +236,11 @@ def cornell_teeth_scene(quality: Quality, box_mm: float = 60.0) -> dict:
              "surface": "white"},
             {**quad, "name": "back", "corner": [0, 0, s], "u": [s, 0, 0], "v": [0, s, 0],
              "surface": "white"},
-            {**quad, "name": "left", "corner": [0, 0, 0], "u": [0, 0, s], "v": [0, s, 0],
+            # the camera sees +x on its left (right = forward × up): red left, green right,
+            # as in the Cornell box (and the built-in cornell_box())
+            {**quad, "name": "left", "corner": [s, 0, 0], "u": [0, 0, s], "v": [0, s, 0],
              "surface": "red"},
-            {**quad, "name": "right", "corner": [s, 0, 0], "u": [0, 0, s], "v": [0, s, 0],
+            {**quad, "name": "right", "corner": [0, 0, 0], "u": [0, 0, s], "v": [0, s, 0],
              "surface": "green"},
             tooth("incisor", 0.27 * s, 0.45 * s, 15.0),
             tooth("molar", 0.52 * s, 0.55 * s, -10.0),
@@ -322,7 +324,10 @@ def crown_scene(quality: Quality) -> tuple[dict, dict]:
                    "up": [0.0, 1.0, 0.0], "fov_deg": fov, "resolution": [w, h]},
         "media": {"enamel": {"material": "enamel"}, "dentin": {"material": "dentin"},
                   "crown": {"material": "biomaterial-table1"}},
-        "surfaces": {"backdrop": {"type": "lambertian", "reflectance": 0.18}},
+        # a black contrastor behind the teeth, as in dental shade photography: light that
+        # passes through the enamel-only incisal edge is lost, so the edge's translucency
+        # shows (against a grey or white background it reads only as a greyer rim)
+        "surfaces": {"backdrop": {"type": "black"}},
         "shapes": [
             {"type": "quad", "name": "backdrop", "corner": [-60.0, -40.0, 15.0],
              "u": [120.0, 0.0, 0.0], "v": [0.0, 80.0, 0.0], "surface": "backdrop"},
