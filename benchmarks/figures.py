@@ -34,9 +34,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quality", default="preview", choices=list(QUALITIES))
     ap.add_argument("--only", default=",".join(FIGURES))
+    ap.add_argument("--out", default=None, help="keep the figures here (default: discarded)")
     args = ap.parse_args()
     rows = {}
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as scratch:
+        tmp = args.out or scratch
         for fig in args.only.split(","):
             t0 = time.perf_counter()
             out = subprocess.run([sys.executable, "-c", CHILD, tmp, args.quality, fig],

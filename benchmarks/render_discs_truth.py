@@ -45,19 +45,36 @@ def main() -> None:
     ap.add_argument("--surface-photons", type=int, default=200_000)
     ap.add_argument("--aim", type=float, default=None,
                     help="fraction of volume photons aimed at the discs (default: the core's)")
+    ap.add_argument("--kernel-clip", action="store_true",
+                    help="clip the density kernel by every face (render option kernel_clip)")
+    ap.add_argument("--truth-cache", default=None,
+                    help="NPZ file: reuse the truth and the path tracers' variances stored "
+                         "there by an earlier run with the same resolution and --ref-spp "
+                         "(written when missing)")
     args = ap.parse_args()
     res = tuple(int(v) for v in args.resolution.split("x"))
     scene = scene_dict(False)
     print(f"# discs.toml at 540 nm, {args.resolution}; load average {os.getloadavg()}")
-    truth, var_t, _, t_nee = halves(scene, res, "volpath-nee", args.ref_spp // 2, 7001)
+    cache = args.truth_cache and os.path.exists(args.truth_cache)
+    if cache:
+        z = np.load(args.truth_cache)
+        truth, var_t = z["truth"], z["var_t"]
+        t_nee, var_vp, t_vp, var_nee, t_nee2 = (float(v) for v in z["costs"])
+        print(f"truth from {args.truth_cache}")
+    else:
+        truth, var_t, _, t_nee = halves(scene, res, "volpath-nee", args.ref_spp // 2, 7001)
     level = float(truth.mean())
     noise = float(np.sqrt(var_t.mean())) / level
     se_mean = float(np.sqrt(var_t.sum())) / truth.size / level
     print(f"truth: volpath-nee {args.ref_spp} spp ({t_nee * args.ref_spp:.0f} s), image mean "
           f"{level:.5f} (s.e. {se_mean:.4f} rel.), own per-pixel noise {noise:.4f} rel.")
-    # per-sample variance of both path tracers from short independent runs
-    _, _, var_vp, t_vp = halves(scene, res, "volpath", 128, 9001)
-    _, _, var_nee, t_nee2 = halves(scene, res, "volpath-nee", 128, 9101)
+    if not cache:
+        # per-sample variance of both path tracers from short independent runs
+        _, _, var_vp, t_vp = halves(scene, res, "volpath", 128, 9001)
+        _, _, var_nee, t_nee2 = halves(scene, res, "volpath-nee", 128, 9101)
+        if args.truth_cache:
+            np.savez(args.truth_cache, truth=truth, var_t=var_t,
+                     costs=np.array([t_nee, var_vp, t_vp, var_nee, t_nee2]))
 
     def cost(e):
         return (t_vp * var_vp / (e * level) ** 2, t_nee2 * var_nee / (e * level) ** 2)
@@ -73,6 +90,8 @@ def main() -> None:
           "| volpath s | volpath-nee s | speed-up vs volpath |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     aim = {} if args.aim is None else {"aim": args.aim}
+    if args.kernel_clip:
+        aim["kernel_clip"] = True
     for c, conf in enumerate(filter(None, args.ppm.split(","))):
         photons, k, spp, alpha = conf.split(":")
         n = 1

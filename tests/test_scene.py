@@ -131,7 +131,7 @@ class FakeCore:
         assert set(settings) == {"integrator", "spp", "photons", "volume_photons",
                                  "volume_stored", "aim", "k", "radius", "step", "seed",
                                  "band", "threads", "max_depth", "passes", "alpha",
-                                 "final_gather", "kernel_layer"}
+                                 "final_gather", "kernel_layer", "kernel_clip"}
         self.calls.append((scene, settings))
         if progress is not None:
             progress(1)
@@ -548,7 +548,7 @@ def test_render_api_with_fake_core(fake_core):
                          "volume_stored": 0, "aim": 0.0, "k": 8, "radius": 1.5,
                          "step": None, "seed": 7, "band": 605,
                          "threads": None, "max_depth": 64, "passes": 1, "alpha": 0.7,
-                         "final_gather": False, "kernel_layer": 0.3}
+                         "final_gather": False, "kernel_layer": 0.3, "kernel_clip": False}
     # red wall at 605 nm from its reflectance table
     assert scene0["surfaces"][1]["reflectance"] == pytest.approx(np.interp(
         605, [400, 550, 580, 600, 700], [0.05, 0.05, 0.2, 0.6, 0.65]))
@@ -570,6 +570,8 @@ def test_render_api_bad_arguments(fake_core):
         dentalux.render(d, kernel_layer=1.5)
     with pytest.raises(ValueError, match=r"aim = 1: out of range"):
         dentalux.render(d, aim=1)
+    with pytest.raises(ValueError, match=r"kernel_clip = 'yes'"):
+        dentalux.render(d, kernel_clip="yes")
     with pytest.raises(ValueError, match=r"volume_stored = -5: out of range"):
         dentalux.render(d, volume_stored=-5)
     with pytest.raises(ValueError, match=r"bands\[0\] = 100: out of range"):

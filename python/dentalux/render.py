@@ -29,7 +29,7 @@ from dentalux.scene.schema import PATH_TRACERS, RENDER_KEYS, validate_bands, val
 
 # Settings passed through ``**options`` (the core's names, docs/render-contract.md).
 OPTIONS = ("volume_photons", "volume_stored", "aim", "k", "radius", "step", "max_depth",
-           "passes", "alpha", "final_gather", "kernel_layer")
+           "passes", "alpha", "final_gather", "kernel_layer", "kernel_clip")
 # Ticks of the progress bar per band; the core's progress(done) is mapped onto them.
 TICKS = 1000
 
@@ -124,7 +124,8 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     volume_photons, volume_stored (photons the volume maps should hold: emission stops there,
     at most volume_photons), aim (fraction of volume photons aimed at the media, [0, 1)),
     k, radius [mm], step [mm], max_depth, passes, alpha, final_gather, kernel_layer (0 = the
-    paper's spherical kernel).
+    paper's spherical kernel), kernel_clip (clip the layer kernel by every face, not only
+    the camera ray's entry and exit planes).
     correlated_bands: give every band the same random streams (band key 0) instead of one
     per wavelength. Photon and camera paths then share their random numbers across bands
     (correlated sampling), so Monte Carlo noise is nearly the same in every band: it shows

@@ -582,6 +582,10 @@ fn settings_from_json(text: &str) -> R<(Settings, Option<usize>)> {
             None => d.final_gather,
         },
         kernel_layer: o.num_or("kernel_layer", d.kernel_layer)?,
+        kernel_clip: match o.opt("kernel_clip") {
+            Some((v, p)) => Node { v, path: &p }.boolean()?,
+            None => d.kernel_clip,
+        },
     };
     let threads = match o.opt("threads") {
         Some((v, p)) => Some(Node { v, path: &p }.uint()? as usize),

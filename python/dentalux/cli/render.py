@@ -81,6 +81,10 @@ def render_command(
         None, "--kernel-layer",
         help="half-height of the boundary-aligned density kernel over the gathering radius, "
              "in [0, 1]; 0 = the paper's sphere (default 0.3)"),
+    kernel_clip: bool = typer.Option(
+        None, "--kernel-clip/--no-kernel-clip",
+        help="clip the density kernel by every face (a disc's rim, curved walls), not only "
+             "by the camera ray's entry and exit planes"),
     cluster: str = typer.Option(
         None, help="run the band x pass tasks on Dask: local:N (LocalCluster of N workers) "
                    "or tcp://HOST:PORT (a running scheduler)"),
@@ -93,7 +97,8 @@ def render_command(
     options = {k_: v for k_, v in (("volume_photons", volume_photons),
                                    ("volume_stored", volume_stored), ("aim", aim), ("k", k),
                                    ("radius", radius), ("step", step), ("alpha", alpha),
-                                   ("kernel_layer", kernel_layer))
+                                   ("kernel_layer", kernel_layer),
+                                   ("kernel_clip", kernel_clip))
                if v is not None}
     common = dict(integrator=integrator, spp=spp, photons=photons, bands=band_list,
                   seed=seed, threads=threads, resolution=parse_resolution(resolution),

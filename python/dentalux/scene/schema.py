@@ -49,6 +49,7 @@ RENDER_KEYS = {
     "alpha": 0.7,
     "final_gather": False,
     "kernel_layer": 0.3,
+    "kernel_clip": False,
 }
 
 INTEGRATORS = ("pm", "path", "vpm", "vpm-full", "volpath", "volpath-nee", "ppm")
@@ -625,8 +626,9 @@ def validate_settings(d: dict, path: str = "settings") -> dict:
                               hi_open=True)
     if "aim" in out:
         out["aim"] = number(out["aim"], p("aim"), lo=0.0, hi=1.0, hi_open=True)
-    if "final_gather" in out:
-        out["final_gather"] = boolean(out["final_gather"], p("final_gather"))
+    for key in ("final_gather", "kernel_clip"):
+        if key in out:
+            out[key] = boolean(out[key], p(key))
     if "kernel_layer" in out:
         out["kernel_layer"] = number(out["kernel_layer"], p("kernel_layer"), lo=0.0, hi=1.0)
     if out.get("threads") is not None:

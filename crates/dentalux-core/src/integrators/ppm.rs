@@ -69,6 +69,7 @@ fn pass_estimator<'a>(scene: &'a Scene, settings: &Settings, maps: &'a PhotonMap
         mode: StoreMode::All,
         max_depth: settings.max_depth,
         layer: settings.kernel_layer,
+        clip: settings.kernel_clip,
         ..VpmParams::default()
     };
     Vpm::new(scene, maps, params)

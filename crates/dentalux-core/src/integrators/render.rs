@@ -113,6 +113,9 @@ pub struct Settings {
     /// `vpm`, `vpm-full`, `ppm`: half-height of the boundary-aligned layer kernel over the
     /// gathering radius, in [0, 1]; 0 the sphere (see `VpmParams::layer`).
     pub kernel_layer: f64,
+    /// `vpm`, `vpm-full`, `ppm`: clip the layer kernel by every face, not only the camera
+    /// ray's entry and exit planes (see `VpmParams::clip`).
+    pub kernel_clip: bool,
 }
 
 impl Default for Settings {
@@ -135,6 +138,7 @@ impl Default for Settings {
             pass_index: 0,
             final_gather: false,
             kernel_layer: crate::integrators::vpm::DEFAULT_LAYER,
+            kernel_clip: crate::integrators::vpm::DEFAULT_CLIP,
         }
     }
 }

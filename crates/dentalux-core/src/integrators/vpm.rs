@@ -19,6 +19,7 @@
 //! | `k` | 64 | photons per estimate |
 //! | `radius` [mm] | 2 · cbrt(3 k V / (4π n)) per medium: twice the radius that holds k photons at the map's mean density (V: bounding box of the map's photons, n: its photons), at most the medium's typical half-thickness ([`half_thickness`]); surface map: the 2-D analogue, at most 0.1 × scene diagonal | largest gathering radius |
 //! | `kernel_layer` | 0.3 | volume kernel: half-height of the boundary-aligned layer kernel over the gathering radius; 0 = the paper's sphere |
+//! | `kernel_clip` | false | clip the layer kernel by every face (32 test points), not only the camera ray's entry and exit planes |
 //! | `step` Δx [mm] | per medium min(0.5 / σt, scene diagonal / 64); never below 1e-5 × diagonal | ray-marching step |
 //! | `light_strata` (VpmParams only) | 3 | an area light's direct light on a surface: 3 × 3 stratified samples |
 //! | `map_threshold` (VpmParams only) | 0.3 | below this eye transmittance a march step queries the map with probability T / 0.3 (weight 0.3 / T, systematic sampling along the ray) |
@@ -34,7 +35,7 @@ use crate::integrators::photon_trace::{PhotonMaps, StoreMode};
 use crate::integrators::render::{render_tiles, Scratch, Settings, Stats};
 use crate::integrators::transport::{cross, eq13_transmittance, spawn, straight_transmittance};
 use crate::lights::Light;
-use crate::photon_map::{PhotonMap, Planes, PHOTON_BYTES};
+use crate::photon_map::{KernelClip, PhotonMap, Planes, PHOTON_BYTES};
 use crate::rng::Stream;
 use crate::scene::{Boundary, Scene};
 use std::f64::consts::PI;
@@ -53,6 +54,8 @@ pub const DEFAULT_MAP_THRESHOLD: f64 = 0.3;
 /// Default of [`VpmParams::layer`]: the layer kernel's half-height over the gathering radius
 /// (0.2 and 0.5 measured the same on the slab; docs/vpm-convergence.md).
 pub const DEFAULT_LAYER: f64 = 0.3;
+/// Default of [`VpmParams::clip`]: off until measured better on Fig. 3 (docs/vpm-convergence.md).
+pub const DEFAULT_CLIP: bool = false;
 /// Default of [`VpmParams::light_strata`].
 pub const DEFAULT_LIGHT_STRATA: u32 = 3;
 
@@ -89,6 +92,10 @@ pub struct VpmParams {
     /// medium gets most of its light (−8.4 % vs the slab simulator on a slab at 4 M photons;
     /// the layer kernel −0.1 %).
     pub layer: f64,
+    /// Clip the layer kernel by every face of the scene, not only by the entry and exit
+    /// planes: 32 test points per estimate, each a segment query from the estimate's point
+    /// (`photon_map::KernelClip`); only estimates whose kernel crosses another face change.
+    pub clip: bool,
 }
 
 impl Default for VpmParams {
@@ -102,6 +109,7 @@ impl Default for VpmParams {
             light_strata: DEFAULT_LIGHT_STRATA,
             map_threshold: DEFAULT_MAP_THRESHOLD,
             layer: DEFAULT_LAYER,
+            clip: DEFAULT_CLIP,
         }
     }
 }
@@ -426,9 +434,17 @@ impl<'a> Vpm<'a> {
                     .min_by(|a, b| depth(a).total_cmp(&depth(b)))
                     .copied()
                     .filter(|_| self.params.layer > 0.0);
+                let hit = |o: Vec3, d: Vec3, t_max: f64| {
+                    scene.intersect(&Ray::new(o, d), t_max).map(|h| (h.p, h.n))
+                };
+                let clip = self.params.clip.then(|| KernelClip {
+                    hit: &hit,
+                    u: rng.uniform(),
+                });
                 let planes = near.map(|near| Planes {
                     near,
                     far: planes.iter().flatten().find(|p| **p != near).copied(),
+                    clip,
                 });
                 let (k, r, layer) = (self.params.k, setup.radius, self.params.layer);
                 let e = match (self.fixed_radius, planes) {
@@ -532,6 +548,7 @@ pub fn render(
         mode,
         max_depth: settings.max_depth,
         layer: settings.kernel_layer,
+        clip: settings.kernel_clip,
         ..VpmParams::default()
     };
     let vpm = Vpm::new(scene, &maps, params);
