@@ -7,7 +7,7 @@ bias (the rest), reports the share of the squared bias in the 15 % steepest pixe
 truth, and writes a PNG of the error smoothed over 5 × 5 pixels.
 
     .venv/bin/python benchmarks/render_discs_bias.py --truth-cache truth.npz --passes 32 \\
-        [--photons 2000000 --k 50 --spp 4] [--kernel-clip] [--integrator vpm-full] \\
+        [--photons 2000000 --k 50 --spp 4] [--no-kernel-clip] [--integrator vpm-full] \\
         [--png bias.png]
 """
 
@@ -30,7 +30,8 @@ def main() -> None:
     ap.add_argument("--spp", type=int, default=4)
     ap.add_argument("--surface-photons", type=int, default=200_000)
     ap.add_argument("--integrator", default="vpm")
-    ap.add_argument("--kernel-clip", action="store_true")
+    ap.add_argument("--kernel-clip", action=argparse.BooleanOptionalAction, default=True,
+                    help="render option kernel_clip (default on, as the core's)")
     ap.add_argument("--png", default=None)
     args = ap.parse_args()
     z = np.load(args.truth_cache)

@@ -45,8 +45,8 @@ def main() -> None:
     ap.add_argument("--surface-photons", type=int, default=200_000)
     ap.add_argument("--aim", type=float, default=None,
                     help="fraction of volume photons aimed at the discs (default: the core's)")
-    ap.add_argument("--kernel-clip", action="store_true",
-                    help="clip the density kernel by every face (render option kernel_clip)")
+    ap.add_argument("--kernel-clip", action=argparse.BooleanOptionalAction, default=None,
+                    help="render option kernel_clip (default: the core's, on)")
     ap.add_argument("--truth-cache", default=None,
                     help="NPZ file: reuse the truth and the path tracers' variances stored "
                          "there by an earlier run with the same resolution and --ref-spp "
@@ -90,8 +90,8 @@ def main() -> None:
           "| volpath s | volpath-nee s | speed-up vs volpath |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     aim = {} if args.aim is None else {"aim": args.aim}
-    if args.kernel_clip:
-        aim["kernel_clip"] = True
+    if args.kernel_clip is not None:
+        aim["kernel_clip"] = args.kernel_clip
     for c, conf in enumerate(filter(None, args.ppm.split(","))):
         photons, k, spp, alpha = conf.split(":")
         n = 1

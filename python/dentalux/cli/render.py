@@ -83,8 +83,9 @@ def render_command(
              "in [0, 1]; 0 = the paper's sphere (default 0.3)"),
     kernel_clip: bool = typer.Option(
         None, "--kernel-clip/--no-kernel-clip",
-        help="clip the density kernel by every face (a disc's rim, curved walls), not only "
-             "by the camera ray's entry and exit planes"),
+        help="clip the density kernels by every face within them (a disc's rim, curved "
+             "walls, a disc standing on the ribbon), not only by the camera ray's entry and "
+             "exit planes (default: on)"),
     cluster: str = typer.Option(
         None, help="run the band x pass tasks on Dask: local:N (LocalCluster of N workers) "
                    "or tcp://HOST:PORT (a running scheduler)"),

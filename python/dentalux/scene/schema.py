@@ -49,7 +49,7 @@ RENDER_KEYS = {
     "alpha": 0.7,
     "final_gather": False,
     "kernel_layer": 0.3,
-    "kernel_clip": False,
+    "kernel_clip": True,
 }
 
 INTEGRATORS = ("pm", "path", "vpm", "vpm-full", "volpath", "volpath-nee", "ppm")
