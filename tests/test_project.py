@@ -40,3 +40,26 @@ def test_projection_refuses_bad_input():
         project(CAMERA, [[1.0, 2.0]])
     with pytest.raises(ValueError, match="behind the camera"):
         square_region(CAMERA, [0.0, 0.0, -60.0], 1.0)
+
+
+def _centre(shape: dict) -> np.ndarray:
+    return np.asarray(shape["corner"]) + 0.5 * (np.asarray(shape["u"]) + np.asarray(shape["v"]))
+
+
+@pytest.mark.parametrize("which", ["cornell_box", "fig5"])
+def test_walls_named_left_and_right_are_seen_there(which):
+    """The Cornell boxes' walls named left (red) and right (green) lie on those sides of the
+    image the renderer makes (Fig. 5 once had them the other way round)."""
+    if which == "cornell_box":
+        from dentalux.scene.builtin import cornell_box
+
+        scene = cornell_box(resolution=(64, 64))
+    else:
+        from dentalux.figures import QUALITIES, cornell_teeth_scene
+
+        scene = cornell_teeth_scene(QUALITIES["preview"])
+    walls = {s["name"]: s for s in scene["shapes"] if s.get("name") in ("left", "right")}
+    assert walls["left"]["surface"] == "red" and walls["right"]["surface"] == "green"
+    w = scene["camera"]["resolution"][0]
+    (xl, _), (xr, _) = project(scene["camera"], [_centre(walls["left"]), _centre(walls["right"])])
+    assert xl < w / 2 < xr
