@@ -806,6 +806,19 @@ mod tests {
     use crate::rng::Stream;
     use crate::sampling::uniform_sphere;
 
+    /// Mean and its standard error.
+    fn mean_se(vals: &[f64]) -> (f64, f64) {
+        let m = vals.iter().sum::<f64>() / vals.len() as f64;
+        let var = vals.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (vals.len() - 1) as f64;
+        (m, (var / vals.len() as f64).sqrt())
+    }
+
+    /// The wall x = 0 as a scene's `hit` would report it (for the clip tests).
+    fn wall_at_x0(o: Vec3, d: Vec3, t_max: f64) -> Option<(Vec3, Vec3)> {
+        let t = -o.x / d.x;
+        (t > 0.0 && t < t_max).then(|| (o + d * t, Vec3::X))
+    }
+
     fn random_map(n: usize, seed: u64, clustered: bool) -> Vec<Photon> {
         let mut s = Stream::new(seed, 0, 0);
         (0..n)
@@ -983,11 +996,6 @@ mod tests {
             far: None,
             clip: None,
         };
-        let stats = |vals: &[f64]| {
-            let m = vals.iter().sum::<f64>() / vals.len() as f64;
-            let var = vals.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (vals.len() - 1) as f64;
-            (m, (var / vals.len() as f64).sqrt())
-        };
         for layer in [0.2, 0.5] {
             for depth in [0.0, 0.02, 0.1, 0.5] {
                 // photons per mm³ at depth d: n (1 + a d) / (100 norm), each of power 1/n
@@ -1022,14 +1030,14 @@ mod tests {
                     }
                 }
                 for (name, vals) in [("k-NN", &knn), ("fixed radius", &fixed)] {
-                    let (m, se) = stats(vals);
+                    let (m, se) = mean_se(vals);
                     assert!(
                         (m - expect).abs() < 4.0 * se,
                         "{name}, layer {layer}, depth {depth}: {m} ± {se} vs {expect}"
                     );
                 }
                 if depth == 0.0 {
-                    let m = stats(&sphere).0;
+                    let m = mean_se(&sphere).0;
                     assert!(m < 0.7 * expect, "sphere at the plane: {m} vs {expect}");
                 }
             }
@@ -1059,11 +1067,6 @@ mod tests {
             })
             .collect();
         let expect = 1.0 / 1000.0 / (4.0 * PI);
-        // the side wall x = 0 as the scene would report it
-        let wall = |o: Vec3, d: Vec3, t_max: f64| {
-            let t = -o.x / d.x;
-            (t > 0.0 && t < t_max).then(|| (o + d * t, Vec3::X))
-        };
         let iso = PhaseFunction::Isotropic;
         let mut nb = Neighbours::new();
         let mut rng = Stream::new(5, 0, 0);
@@ -1079,24 +1082,19 @@ mod tests {
                 let e = map.volume_radiance_layer(x, Vec3::Z, &iso, 100, 5.0, 0.3, planes, &mut nb);
                 plain.push(e.value);
                 planes.clip = Some(KernelClip {
-                    hit: &wall,
+                    hit: &wall_at_x0,
                     u: rng.uniform(),
                 });
                 let e = map.volume_radiance_layer(x, Vec3::Z, &iso, 100, 5.0, 0.3, planes, &mut nb);
                 clipped.push(e.value);
             }
         }
-        let stats = |vals: &[f64]| {
-            let m = vals.iter().sum::<f64>() / vals.len() as f64;
-            let var = vals.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (vals.len() - 1) as f64;
-            (m, (var / vals.len() as f64).sqrt())
-        };
-        let (m, se) = stats(&clipped);
+        let (m, se) = mean_se(&clipped);
         assert!(
             (m - expect).abs() < 4.0 * se,
             "clipped: {m} ± {se} vs {expect}"
         );
-        let (m0, se0) = stats(&plain);
+        let (m0, se0) = mean_se(&plain);
         assert!(
             m0 < expect - 4.0 * se0,
             "unclipped: {m0} ± {se0} vs {expect}"
@@ -1124,10 +1122,6 @@ mod tests {
             })
             .collect();
         let expect = 1.0 / 100.0; // irradiance outside: power per mm²
-        let wall = |o: Vec3, d: Vec3, t_max: f64| {
-            let t = -o.x / d.x;
-            (t > 0.0 && t < t_max).then(|| (o + d * t, Vec3::X))
-        };
         let mut nb = Neighbours::new();
         let mut rng = Stream::new(6, 0, 0);
         let (mut plain, mut clipped) = (Vec::new(), Vec::new());
@@ -1136,24 +1130,19 @@ mod tests {
                 let x = Vec3::new(0.05, -4.0 + 0.5 * q as f64, 0.0);
                 plain.push(map.surface_irradiance(x, Vec3::Z, 100, 5.0, &mut nb).value);
                 let clip = KernelClip {
-                    hit: &wall,
+                    hit: &wall_at_x0,
                     u: rng.uniform(),
                 };
                 let e = map.surface_irradiance_clipped(x, Vec3::Z, 100, 5.0, &mut nb, &clip);
                 clipped.push(e.value);
             }
         }
-        let stats = |vals: &[f64]| {
-            let m = vals.iter().sum::<f64>() / vals.len() as f64;
-            let var = vals.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (vals.len() - 1) as f64;
-            (m, (var / vals.len() as f64).sqrt())
-        };
-        let (m, se) = stats(&clipped);
+        let (m, se) = mean_se(&clipped);
         assert!(
             (m - expect).abs() < 4.0 * se,
             "clipped: {m} ± {se} vs {expect}"
         );
-        let (m0, se0) = stats(&plain);
+        let (m0, se0) = mean_se(&plain);
         assert!(m0 > expect + 4.0 * se0, "plain: {m0} ± {se0} vs {expect}");
     }
 
