@@ -603,6 +603,15 @@ def test_cli_render_writes_outputs(fake_core, tmp_path, capsys):
     assert all(c[0]["camera"]["width"] == 8 for c in calls)
 
 
+def test_cli_render_kernel_clip_flag(fake_core, tmp_path):
+    for flag, value in (([], True), (["--no-kernel-clip"], False), (["--kernel-clip"], True)):
+        with pytest.raises(SystemExit) as exc:
+            main(["render", str(CORNELL), "--out", str(tmp_path / "o"), "--spp", "1",
+                  "--photons", "10", "--bands", "540", "--resolution", "4x3", *flag])
+        assert exc.value.code == 0
+        assert fake_core.calls[-1][1]["kernel_clip"] is value
+
+
 @pytest.mark.parametrize("args,message", [
     (["--bands", "450,x"], "--bands = '450,x'"),
     (["--resolution", "64by48"], "--resolution = '64by48'"),
