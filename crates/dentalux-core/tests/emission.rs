@@ -72,11 +72,15 @@ fn small_medium_scene() -> Scene {
 }
 
 fn trace(scene: &Scene, emission: &Emission, tag: u64) -> PhotonMaps {
+    trace_targets(scene, emission, tag, VOLUME)
+}
+
+fn trace_targets(scene: &Scene, emission: &Emission, tag: u64, targets: Targets) -> PhotonMaps {
     trace_emission(
         scene,
         emission,
         StoreMode::All,
-        VOLUME,
+        targets,
         tag << 32,
         9,
         0,
@@ -137,6 +141,44 @@ fn aimed_emission_keeps_the_stored_power() {
     clear.media[1] = medium(0.05, 0.0, 0.0, 1.4);
     assert!(Aim::new(&clear, 0.9).is_none());
     assert!(Aim::new(&scene, 0.0).is_none());
+}
+
+/// The surface pass aimed the same way: the power its map stores (light on the floor that
+/// came through the ball, or off the floor again) is the light's own emission's, from far
+/// more photons per photon emitted.
+#[test]
+fn aimed_emission_keeps_the_surface_power() {
+    let scene = small_medium_scene();
+    let surface = Targets {
+        volume: false,
+        surface: true,
+    };
+    let run = |aim: Option<Aim>, photons: u64| {
+        let e = Emission {
+            photons,
+            stored_cap: None,
+            aim,
+        };
+        let (mut power, mut count) = (Vec::new(), 0usize);
+        for r in 0..12 {
+            let maps = trace_targets(&scene, &e, r + 100, surface);
+            power.push(maps.ledger.stored_surface);
+            count += maps.surface.len();
+        }
+        (mean_se(&power), count)
+    };
+    let ((plain, se_p), n_plain) = run(None, 400_000);
+    let ((aimed, se_a), n_aimed) = run(Aim::new(&scene, 0.8), 100_000);
+    let se = (se_p * se_p + se_a * se_a).sqrt();
+    eprintln!(
+        "surface power: light's emission {plain:.5} ± {se_p:.5} ({n_plain} photons), \
+         aimed {aimed:.5} ± {se_a:.5} ({n_aimed} photons)"
+    );
+    assert!(
+        (aimed - plain).abs() < 4.0 * se,
+        "{aimed} vs {plain} ± {se}"
+    );
+    assert!(n_aimed > n_plain, "{n_aimed} vs {n_plain}");
 }
 
 /// A point light in an infinite medium of albedo a: the maps hold Φ a/(1 − a) of stored

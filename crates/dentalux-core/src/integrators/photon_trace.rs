@@ -480,12 +480,21 @@ pub fn trace_camera_maps(
         aim: Aim::new(scene, settings.aim),
     };
     let mut maps = trace_emission(scene, &emission, mode, vol_only, tag, seed, band, control)?;
-    let surf = trace_photons_with(
+    // the surface pass is aimed too: the light that reaches a surface through a medium (under
+    // and behind a disc) is what its map is for, and unaimed only a few photons in a thousand
+    // go that way on the Fig. 3 discs
+    let surface_emission = Emission {
+        photons: settings.photons,
+        stored_cap: None,
+        aim: emission.aim,
+    };
+    let tag = SURFACE_PASS | tag;
+    let surf = trace_emission(
         scene,
-        settings.photons,
+        &surface_emission,
         mode,
         surf_only,
-        SURFACE_PASS | tag,
+        tag,
         seed,
         band,
         control,
