@@ -248,7 +248,7 @@ pub struct Planes<'a> {
     pub near: (Vec3, Vec3),
     /// The opposite boundary plane, if any.
     pub far: Option<(Vec3, Vec3)>,
-    /// Test points for the parts of the kernel outside the medium, if enabled.
+    /// Rays that find the other faces within the kernel, if enabled.
     pub clip: Option<KernelClip<'a>>,
 }
 
@@ -281,6 +281,28 @@ pub struct KernelClip<'a> {
     pub hit: &'a dyn Fn(Vec3, Vec3, f64) -> Option<(Vec3, Vec3)>,
     /// Random rotation of the rays and quadrature points about the kernel's axis, [0, 1).
     pub u: f64,
+}
+
+/// Whether offset `d` lies on the inner side of every plane (offset, outward unit normal).
+fn inside_planes(planes: &[(Vec3, Vec3)], d: Vec3) -> bool {
+    planes.iter().all(|(o, nrm)| (d - *o).dot(*nrm) < 0.0)
+}
+
+/// The fraction of the disc of radius `r` about the origin of the (s, t) plane that lies
+/// inside every plane (offset, outward normal; z ignored): a 512-point quadrature in
+/// radius² and angle, rotated by `u` ∈ [0, 1).
+fn disc_fraction_inside(planes: &[(Vec3, Vec3)], r: f64, u: f64) -> f64 {
+    let [nr, na] = CLIP_GRID_2D;
+    let mut hits = 0usize;
+    for ir in 0..nr {
+        let rho = r * ((ir as f64 + 0.5) / nr as f64).sqrt();
+        for ia in 0..na {
+            let phi = 2.0 * PI * (ia as f64 + u) / na as f64;
+            let d = Vec3::new(rho * phi.cos(), rho * phi.sin(), 0.0);
+            hits += inside_planes(planes, d) as usize;
+        }
+    }
+    hits as f64 / (nr * na) as f64
 }
 
 impl KernelClip<'_> {
@@ -328,20 +350,10 @@ impl KernelClip<'_> {
             return None;
         }
         let planes = &planes[..count];
-        let inside = |d: Vec3| planes.iter().all(|(o, nrm)| (d - *o).dot(*nrm) < 0.0);
         let disc = PI * big_r * big_r;
         let m = if planes.iter().all(|(_, nrm)| nrm.z.abs() < 1e-6) {
             // cross-section A (its area by quadrature) times [a, b]
-            let [nr, na] = CLIP_GRID_2D;
-            let mut hits = 0usize;
-            for ir in 0..nr {
-                let rho = big_r * ((ir as f64 + 0.5) / nr as f64).sqrt();
-                for ia in 0..na {
-                    let phi = 2.0 * PI * (ia as f64 + self.u) / na as f64;
-                    hits += inside(local(rho, phi, 0.0)) as usize;
-                }
-            }
-            let area = disc * hits as f64 / (nr * na) as f64;
+            let area = disc * disc_fraction_inside(planes, big_r, self.u);
             [
                 area * (b - a),
                 area * (b * b - a * a) / 2.0,
@@ -356,7 +368,7 @@ impl KernelClip<'_> {
                     let rho = big_r * ((ir as f64 + 0.5) / nr as f64).sqrt();
                     for ia in 0..na {
                         let phi = 2.0 * PI * (ia as f64 + self.u) / na as f64;
-                        if inside(local(rho, phi, z)) {
+                        if inside_planes(planes, local(rho, phi, z)) {
                             m[0] += 1.0;
                             m[1] += z;
                             m[2] += z * z;
@@ -725,20 +737,10 @@ impl PhotonMap {
             Vec3::new(r * phi.cos(), r * phi.sin(), 0.0)
         });
         let planes = &planes[..count];
-        let inside = |d: Vec3| planes.iter().all(|(o, nrm)| (d - *o).dot(*nrm) < 0.0);
         let (area, unbias) = if count == 0 {
             (PI * r * r, unbias)
         } else {
-            let [nr, na] = CLIP_GRID_2D;
-            let mut hits = 0usize;
-            for ir in 0..nr {
-                let rho = r * ((ir as f64 + 0.5) / nr as f64).sqrt();
-                for ia in 0..na {
-                    let phi = 2.0 * PI * (ia as f64 + clip.u) / na as f64;
-                    hits += inside(Vec3::new(rho * phi.cos(), rho * phi.sin(), 0.0)) as usize;
-                }
-            }
-            (PI * r * r * hits as f64 / (nr * na) as f64, 1.0)
+            (PI * r * r * disc_fraction_inside(planes, r, clip.u), 1.0)
         };
         let kth = (count > 0 && nb.len() >= k && k >= 2)
             .then(|| {
@@ -754,7 +756,7 @@ impl PhotonMap {
             let p = &self.photons[i as usize];
             if p.direction().dot(n) < 0.0
                 && Some(i) != kth
-                && (count == 0 || inside(frame.to_local(p.position() - x)))
+                && (count == 0 || inside_planes(planes, frame.to_local(p.position() - x)))
             {
                 sum += p.power as f64;
                 n_in += 1;

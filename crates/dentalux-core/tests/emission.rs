@@ -89,6 +89,19 @@ fn trace_targets(scene: &Scene, emission: &Emission, tag: u64, targets: Targets)
     .unwrap()
 }
 
+/// `reps` independent traces of `emission` (stream tags `tag0`, `tag0 + 1`, ...).
+fn repeat(
+    scene: &Scene,
+    emission: &Emission,
+    targets: Targets,
+    reps: u64,
+    tag0: u64,
+) -> Vec<PhotonMaps> {
+    (0..reps)
+        .map(|r| trace_targets(scene, emission, tag0 + r, targets))
+        .collect()
+}
+
 /// Mean and standard error over independent repetitions.
 fn mean_se(v: &[f64]) -> (f64, f64) {
     let n = v.len() as f64;
@@ -104,24 +117,24 @@ fn aimed_emission_keeps_the_stored_power() {
     let scene = small_medium_scene();
     let aim = Aim::new(&scene, 0.8).expect("the ball is a target");
     assert_eq!(aim.targets(), 1);
-    let reps = 12;
     let run = |aim: Option<Aim>, photons: u64| {
         let e = Emission {
             photons,
             stored_cap: None,
             aim,
         };
-        let (mut power, mut count) = (Vec::new(), 0usize);
-        for r in 0..reps {
-            let maps = trace(&scene, &e, r + 1);
-            power.push(maps.ledger.stored_volume[1]);
-            count += maps.volume[1].len();
+        let all = repeat(&scene, &e, VOLUME, 12, 1);
+        for maps in &all {
             assert!(
                 (maps.volume[1].total_power() - maps.ledger.stored_volume[1]).abs()
                     < 1e-4 * maps.ledger.stored_volume[1]
             );
         }
-        (mean_se(&power), count)
+        let power: Vec<f64> = all.iter().map(|m| m.ledger.stored_volume[1]).collect();
+        (
+            mean_se(&power),
+            all.iter().map(|m| m.volume[1].len()).sum::<usize>(),
+        )
     };
     let ((plain, se_p), n_plain) = run(None, 200_000);
     let ((aimed, se_a), n_aimed) = run(Some(aim), 50_000);
@@ -159,13 +172,12 @@ fn aimed_emission_keeps_the_surface_power() {
             stored_cap: None,
             aim,
         };
-        let (mut power, mut count) = (Vec::new(), 0usize);
-        for r in 0..12 {
-            let maps = trace_targets(&scene, &e, r + 100, surface);
-            power.push(maps.ledger.stored_surface);
-            count += maps.surface.len();
-        }
-        (mean_se(&power), count)
+        let all = repeat(&scene, &e, surface, 12, 100);
+        let power: Vec<f64> = all.iter().map(|m| m.ledger.stored_surface).collect();
+        (
+            mean_se(&power),
+            all.iter().map(|m| m.surface.len()).sum::<usize>(),
+        )
     };
     let ((plain, se_p), n_plain) = run(None, 400_000);
     let ((aimed, se_a), n_aimed) = run(Aim::new(&scene, 0.8), 100_000);

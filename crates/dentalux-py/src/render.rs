@@ -616,8 +616,6 @@ fn stats_dict<'py>(py: Python<'py>, s: &Stats) -> PyResult<Bound<'py, PyDict>> {
     Ok(d)
 }
 
-/// Render one band of a resolved scene (docs/render-contract.md): returns the radiance image
-/// (numpy float32, height × width) and a dict of statistics.
 /// Pixel positions (x, y) of world points [mm] on the film of the camera in `camera_json`
 /// (the render contract's `camera` object): the inverse of the core's camera rays, so image
 /// regions follow the render's own handedness. `None` for a point behind the camera.
@@ -641,6 +639,8 @@ pub fn camera_project(
         .collect())
 }
 
+/// Render one band of a resolved scene (docs/render-contract.md): returns the radiance image
+/// (numpy float32, height × width) and a dict of statistics.
 #[pyfunction]
 #[pyo3(signature = (scene_json, settings_json, progress=None))]
 pub fn render_band<'py>(

@@ -12,17 +12,16 @@ import json
 import numpy as np
 
 from dentalux import _core
+from dentalux.scene.resolve import camera_contract
+from dentalux.scene.schema import validate_camera
 
 
 def project(camera: dict, points) -> np.ndarray:
     """Pixel positions (x, y) of world ``points`` [mm], shape (n, 3), on the film of a scene
     description's ``camera`` (position, look_at, up, fov_deg, resolution); x from the left,
     y from the top. A point behind the camera gives (nan, nan)."""
-    w, h = camera["resolution"]
-    contract = {"position": list(map(float, camera["position"])),
-                "look_at": list(map(float, camera["look_at"])),
-                "up": list(map(float, camera.get("up", [0.0, 1.0, 0.0]))),
-                "fov_deg": float(camera["fov_deg"]), "width": int(w), "height": int(h)}
+    cam = validate_camera(camera)
+    contract = camera_contract(cam, *cam["resolution"])
     pts = np.atleast_2d(np.asarray(points, float))
     if pts.shape[-1] != 3:
         raise ValueError(f"points: expected shape (n, 3), got {pts.shape}")
@@ -43,7 +42,7 @@ def square_region(camera: dict, centre, half_mm: float, facing=(0.0, 0.0, -1.0))
     xy = project(camera, corners)
     if np.isnan(xy).any():
         raise ValueError(f"region centre {c.tolist()}: behind the camera")
-    w, h = camera["resolution"]
+    w, h = validate_camera(camera)["resolution"]
     x0, y0 = np.floor(xy.min(axis=0)).astype(int)
     x1, y1 = np.ceil(xy.max(axis=0)).astype(int)
     return [max(0, int(x0)), max(0, int(y0)), min(int(w), int(x1)), min(int(h), int(y1))]

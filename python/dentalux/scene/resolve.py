@@ -119,6 +119,12 @@ def _identity_or(m: np.ndarray) -> list[list[float]]:
     return [[float(x) for x in row] for row in m]
 
 
+def camera_contract(cam: dict, width: int, height: int) -> dict:
+    """The render contract's camera object from a validated scene camera."""
+    return {"position": cam["position"], "look_at": cam["look_at"], "up": cam["up"],
+            "fov_deg": cam["fov_deg"], "width": int(width), "height": int(height)}
+
+
 class Scene:
     """A validated scene that resolves to the render contract per wavelength band.
 
@@ -442,8 +448,7 @@ class Scene:
         cam = self.description["camera"]
         w, h = resolution if resolution is not None else self.resolution
         return {
-            "camera": {"position": cam["position"], "look_at": cam["look_at"], "up": cam["up"],
-                       "fov_deg": cam["fov_deg"], "width": int(w), "height": int(h)},
+            "camera": camera_contract(cam, w, h),
             "ambient_medium": self.media_names.index(cam["medium"]),
             "media": [self.medium_at(n, wl) for n in self.media_names],
             "surfaces": [self._surface_at(n, wl) for n in self.surface_names],

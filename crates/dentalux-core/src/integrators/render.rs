@@ -113,8 +113,9 @@ pub struct Settings {
     /// `vpm`, `vpm-full`, `ppm`: half-height of the boundary-aligned layer kernel over the
     /// gathering radius, in [0, 1]; 0 the sphere (see `VpmParams::layer`).
     pub kernel_layer: f64,
-    /// `vpm`, `vpm-full`, `ppm`: clip the layer kernel by every face, not only the camera
-    /// ray's entry and exit planes (see `VpmParams::clip`).
+    /// `vpm`, `vpm-full`, `ppm`: clip the layer kernel (and vpm's surface disc) by every
+    /// other face within it, not only the camera ray's entry and exit planes (see
+    /// `VpmParams::clip`).
     pub kernel_clip: bool,
 }
 
