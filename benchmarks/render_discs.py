@@ -70,19 +70,24 @@ def render(scene: dict, res, **kw):
 
 def passes(scene: dict, res, n: int, seed0: int, photons: int, k: int, spp: int,
            surface: int, integrator: str = "vpm", budget: float | None = None,
-           on_pass=None, **options):
-    """Average ``n`` independent passes (seeds seed0, seed0 + 1, ...; each its own photon maps
-    and camera samples). Stops early when the wall time so far plus one more pass would pass
-    ``budget``. ``on_pass(count, seconds, mean image)`` after each pass. Returns (mean image,
-    per-pixel variance of that mean = s²/n, passes, wall seconds)."""
+           on_pass=None, independent: bool = False, **options):
+    """Average ``n`` passes: seed seed0 with pass_index 0, 1, ... (each its own photon maps and
+    camera paths; the sub-pixel positions continue one stratified sequence per pixel, as
+    `dentalux render --passes` does), or with ``independent`` seeds seed0, seed0 + 1, ...
+    (fully independent passes, as before the film continued its sequence). Stops early when
+    the wall time so far plus one more pass would pass ``budget``. ``on_pass(count, seconds,
+    mean image)`` after each pass. Returns (mean image, s²/n from the spread of the passes —
+    the variance of the mean for independent passes, an overestimate otherwise — passes, wall
+    seconds)."""
     total = sq = None
     wall = 0.0
     done = 0
     for p in range(n):
         if budget is not None and done and wall * (done + 1) / done > budget:
             break
-        img, _, t = render(scene, res, integrator=integrator, spp=spp, seed=seed0 + p,
-                           volume_photons=photons, photons=surface, k=k, **options)
+        key = dict(seed=seed0 + p) if independent else dict(seed=seed0, pass_index=p)
+        img, _, t = render(scene, res, integrator=integrator, spp=spp, volume_photons=photons,
+                           photons=surface, k=k, **key, **options)
         wall += t
         done += 1
         total = img.copy() if total is None else total + img

@@ -32,7 +32,17 @@ def main() -> None:
     ap.add_argument("--integrator", default="vpm")
     ap.add_argument("--kernel-clip", action=argparse.BooleanOptionalAction, default=True,
                     help="render option kernel_clip (default on, as the core's)")
+    ap.add_argument("--independent", action="store_true",
+                    help="independent seeds per pass (the film does not continue its "
+                         "sub-pixel sequence across passes)")
+    ap.add_argument("--aim", type=float, default=None,
+                    help="fraction of photons aimed at the discs (default: the core's, 0)")
+    ap.add_argument("--volume-stored", type=int, default=None,
+                    help="photons the volume maps should hold (--photons is then the cap "
+                         "on emission)")
     ap.add_argument("--png", default=None)
+    ap.add_argument("--save", default=None,
+                    help="NPZ file: keep the mean image and its per-pixel variance")
     args = ap.parse_args()
     z = np.load(args.truth_cache)
     truth, var_t = z["truth"], z["var_t"]
@@ -41,9 +51,14 @@ def main() -> None:
     if truth.shape != res[::-1]:
         raise SystemExit(f"--truth-cache holds a {truth.shape[1]}x{truth.shape[0]} truth, "
                          f"not {args.resolution}")
+    extra = {k: v for k, v in (("aim", args.aim), ("volume_stored", args.volume_stored))
+             if v is not None}
     img, var, done, wall = passes(scene_dict(False), res, args.passes, 3000, args.photons,
                                   args.k, args.spp, args.surface_photons,
-                                  integrator=args.integrator, kernel_clip=args.kernel_clip)
+                                  integrator=args.integrator, kernel_clip=args.kernel_clip,
+                                  independent=args.independent, **extra)
+    if args.save:
+        np.savez(args.save, img=img, var=var, passes=done, wall=wall)
     err = img - truth
     total = np.sqrt(max(float(np.mean(err ** 2) - var_t.mean()), 0.0)) / level
     noise = float(np.sqrt(var.mean())) / level

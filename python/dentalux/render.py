@@ -29,7 +29,7 @@ from dentalux.scene.schema import PATH_TRACERS, RENDER_KEYS, validate_bands, val
 
 # Settings passed through ``**options`` (the core's names, docs/render-contract.md).
 OPTIONS = ("volume_photons", "volume_stored", "aim", "k", "radius", "step", "max_depth",
-           "passes", "alpha", "final_gather", "kernel_layer", "kernel_clip")
+           "passes", "alpha", "final_gather", "kernel_layer", "kernel_clip", "pass_index")
 # Ticks of the progress bar per band; the core's progress(done) is mapped onto them.
 TICKS = 1000
 
@@ -125,7 +125,10 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     at most volume_photons), aim (fraction of volume photons aimed at the media, [0, 1)),
     k, radius [mm], step [mm], max_depth, passes, alpha, final_gather, kernel_layer (0 = the
     paper's spherical kernel), kernel_clip (clip the layer kernel by every face, not only
-    the camera ray's entry and exit planes).
+    the camera ray's entry and exit planes), pass_index (render pass p of a progressive
+    render: its own photon maps and paths, the pixels' sub-pixel sequence continued where
+    pass p − 1 stopped; the mean of passes 0..N−1 is what ``dentalux render --passes N``
+    shows).
     correlated_bands: give every band the same random streams (band key 0) instead of one
     per wavelength. Photon and camera paths then share their random numbers across bands
     (correlated sampling), so Monte Carlo noise is nearly the same in every band: it shows

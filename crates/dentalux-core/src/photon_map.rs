@@ -293,16 +293,29 @@ fn inside_planes(planes: &[(Vec3, Vec3)], d: Vec3) -> bool {
 /// radius² and angle, rotated by `u` ∈ [0, 1).
 fn disc_fraction_inside(planes: &[(Vec3, Vec3)], r: f64, u: f64) -> f64 {
     let [nr, na] = CLIP_GRID_2D;
+    let dirs = rotated_circle::<{ CLIP_GRID_2D[1] }>(u);
     let mut hits = 0usize;
     for ir in 0..nr {
         let rho = r * ((ir as f64 + 0.5) / nr as f64).sqrt();
-        for ia in 0..na {
-            let phi = 2.0 * PI * (ia as f64 + u) / na as f64;
-            let d = Vec3::new(rho * phi.cos(), rho * phi.sin(), 0.0);
-            hits += inside_planes(planes, d) as usize;
+        for [c, s] in dirs {
+            hits += inside_planes(planes, Vec3::new(rho * c, rho * s, 0.0)) as usize;
         }
     }
     hits as f64 / (nr * na) as f64
+}
+
+/// (cos φ_j, sin φ_j) for φ_j = 2π (j + u) / N, j < N: one sin_cos and a rotation per point
+/// (the quadratures' 512 sin_cos calls were 5 % of a Fig. 3 render).
+fn rotated_circle<const N: usize>(u: f64) -> [[f64; 2]; N] {
+    let (s0, c0) = (2.0 * PI * u / N as f64).sin_cos();
+    let (ds, dc) = (2.0 * PI / N as f64).sin_cos();
+    let mut out = [[0.0; 2]; N];
+    let (mut c, mut s) = (c0, s0);
+    for o in out.iter_mut() {
+        *o = [c, s];
+        (c, s) = (c * dc - s * ds, s * dc + c * ds);
+    }
+    out
 }
 
 impl KernelClip<'_> {
@@ -361,14 +374,14 @@ impl KernelClip<'_> {
             ]
         } else {
             let [nz, nr, na] = CLIP_GRID_3D;
+            let dirs = rotated_circle::<{ CLIP_GRID_3D[2] }>(self.u);
             let mut m = [0.0; 3];
             for iz in 0..nz {
                 let z = a + (b - a) * (iz as f64 + 0.5) / nz as f64;
                 for ir in 0..nr {
                     let rho = big_r * ((ir as f64 + 0.5) / nr as f64).sqrt();
-                    for ia in 0..na {
-                        let phi = 2.0 * PI * (ia as f64 + self.u) / na as f64;
-                        if inside_planes(planes, local(rho, phi, z)) {
+                    for [c, s] in dirs {
+                        if inside_planes(planes, Vec3::new(rho * c, rho * s, z)) {
                             m[0] += 1.0;
                             m[1] += z;
                             m[2] += z * z;
@@ -805,6 +818,17 @@ impl PhotonMap {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The rotated circle of the clip quadratures equals direct sin_cos at every point.
+    #[test]
+    fn rotated_circle_matches_sin_cos() {
+        for u in [0.0, 0.37, 0.999] {
+            for (j, [c, s]) in rotated_circle::<32>(u).into_iter().enumerate() {
+                let (s1, c1) = (2.0 * PI * (j as f64 + u) / 32.0).sin_cos();
+                assert!((c - c1).abs() < 1e-12 && (s - s1).abs() < 1e-12, "{u} {j}");
+            }
+        }
+    }
     use crate::rng::Stream;
     use crate::sampling::uniform_sphere;
 

@@ -96,9 +96,10 @@ pub fn sample_discrete(weights: &[f64], u: f64) -> usize {
 /// Point `i` of the R2 low-discrepancy sequence in [0, 1)², rotated by `shift`
 /// (Cranley–Patterson): with a uniform random shift every point is uniform on its own (so an
 /// average over points stays unbiased) while the points together cover the square far more
-/// evenly than independent ones. Used for the sub-pixel positions of camera samples.
+/// evenly than independent ones. Used for the sub-pixel positions of camera samples; any run
+/// of consecutive points is as even, so averaged passes can continue one sequence.
 #[inline]
-pub fn r2_point(i: u32, shift: [f64; 2]) -> [f64; 2] {
+pub fn r2_point(i: u64, shift: [f64; 2]) -> [f64; 2] {
     // 1/φ₂ and 1/φ₂², φ₂ the plastic number (root of x³ = x + 1)
     const A1: f64 = 0.754_877_666_246_692_7;
     const A2: f64 = 0.569_840_290_998_053_2;
@@ -176,7 +177,7 @@ mod tests {
             let shift = s.uniform2();
             let mut cells = [0i32; 16];
             for i in 0..64 {
-                let [x, y] = r2_point(i, shift);
+                let [x, y] = r2_point(i as u64, shift);
                 assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
                 cells[(x * 4.0) as usize * 4 + (y * 4.0) as usize] += 1;
             }

@@ -618,6 +618,9 @@ def validate_settings(d: dict, path: str = "settings") -> dict:
                     ("seed", 0), ("max_depth", 1), ("passes", 1)):
         if key in out:
             out[key] = integer(out[key], p(key), lo=lo)
+    if "pass_index" in out:
+        # the upper bound (pass_index + passes <= 4095) is the core's to check
+        out["pass_index"] = integer(out["pass_index"], p("pass_index"), lo=0)
     for key in ("radius", "step"):
         if out.get(key) is not None:
             out[key] = positive(out[key], p(key))

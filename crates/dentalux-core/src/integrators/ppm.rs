@@ -15,7 +15,7 @@
 //! [`SURFACE_PASS`]) and renders its camera pass with seed `seed ^ (p << 40)`.
 
 use crate::control::Control;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::integrators::photon_trace::PhotonMaps;
 use crate::integrators::photon_trace::{trace_camera_maps, StoreMode};
 use crate::integrators::render::{render_tiles, Settings, Stats};
@@ -40,8 +40,12 @@ pub fn radius_ratio(i: u32, alpha: f64, dim: i32) -> f64 {
 /// Seed of the camera pass of pass `pass` (1-based): `seed ^ (pass << 40)`. Other
 /// integrators use it for their `pass_index` > 0 too, so every pass has its own streams.
 pub fn pass_seed(seed: u64, pass: u32) -> u64 {
-    seed ^ ((pass as u64) << 40)
+    seed ^ ((pass as u64) << PASS_SHIFT)
 }
+
+/// Where [`pass_seed`] puts the pass number: bits `PASS_SHIFT` .. `PASS_SHIFT` + 12 of the
+/// seed (passes are below [`MAX_PASSES`] = 2¹²).
+pub const PASS_SHIFT: u32 = 40;
 
 /// The photon maps of pass `pass` (1-based): `settings.volume_photons` volume photons with
 /// tag `pass · 2³²` and `settings.photons` surface photons with tag `SURFACE_PASS | pass · 2³²`.
@@ -103,15 +107,11 @@ fn first_radii(
 /// `settings.radius` first traces pass 1's maps to find r_1 (and drops them): it costs one
 /// more photon pass, not more memory.
 pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(Vec<f32>, Stats)> {
-    let first = settings.pass_index as u64 + 1;
-    let last = settings.pass_index as u64 + settings.passes as u64;
-    if last >= MAX_PASSES as u64 {
-        return Err(Error::InvalidInput(format!(
-            "settings.pass_index + settings.passes = {last} is out of range: allowed [1, {}]",
-            MAX_PASSES - 1
-        )));
-    }
-    let (first, last) = (first as u32, last as u32);
+    // in range: Settings::validate bounds pass_index + passes by MAX_PASSES − 1
+    let (first, last) = (
+        settings.pass_index + 1,
+        settings.pass_index + settings.passes,
+    );
     let cam = &scene.camera;
     let mut sum = vec![0.0f64; cam.width * cam.height];
     let mut stats = Stats {
@@ -156,6 +156,8 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
         vpm.fixed_radius = true;
         let pass_settings = Settings {
             seed: pass_seed(settings.seed, pass),
+            // the film continues its sub-pixel sequence where the previous pass stopped
+            pass_index: pass - 1,
             ..*settings
         };
         let t0 = Instant::now();

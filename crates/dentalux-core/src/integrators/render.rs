@@ -160,6 +160,14 @@ impl Settings {
         if self.passes == 0 {
             return bad("passes", "= 0 is out of range: allowed ≥ 1");
         }
+        // pass numbers live in 12 bits of the seeds (ppm::pass_seed, film_key)
+        let last = self.pass_index as u64 + self.passes as u64;
+        if last >= super::ppm::MAX_PASSES as u64 {
+            return Err(Error::InvalidInput(format!(
+                "settings.pass_index + settings.passes = {last} is out of range: allowed [1, {}]",
+                super::ppm::MAX_PASSES - 1
+            )));
+        }
         for (k, v) in [("radius", self.radius), ("step", self.step)] {
             if let Some(v) = v {
                 crate::error::check_positive(&format!("settings.{k}"), v, "mm")?;
@@ -245,9 +253,27 @@ impl Totals {
     }
 }
 
+/// Stream tag of the film's sub-pixel rotations (apart from tiles' and photons' streams).
+const FILM_STREAM: u64 = 1 << 60;
+
+/// The key of a pixel's sub-pixel sequence: the seed without the bits [`ppm::pass_seed`]
+/// flips per pass, and the first sample of this pass, `pass_index` · spp. Every pass of a
+/// seed walks on along one randomly rotated R2 sequence per pixel, so N averaged passes
+/// stratify the pixel like one render with N · spp samples: on Fig. 3 the pixel footprint
+/// (checker edges, rims) is most of the camera pass's noise, and independent rotations per
+/// pass left it falling only as 1/N (docs/vpm-convergence.md, fifth session). Each sample is
+/// still uniform over its pixel, so every pass stays unbiased on its own.
+///
+/// [`ppm::pass_seed`]: super::ppm::pass_seed
+fn film_key(settings: &Settings) -> (u64, u64) {
+    let seed = settings.seed & !(((super::ppm::MAX_PASSES as u64) - 1) << super::ppm::PASS_SHIFT);
+    (seed, settings.pass_index as u64 * settings.spp as u64)
+}
+
 /// Render the film tile by tile: `radiance(ray, rng, scratch)` is called `spp` times per
 /// pixel with camera rays through randomly rotated R2 sub-pixel positions (stratified,
-/// each unbiased) and averaged. Returns the image and the summed counters.
+/// each unbiased; passes of one seed continue the sequence, [`film_key`]) and averaged.
+/// Returns the image and the summed counters.
 pub fn render_tiles<F>(
     scene: &Scene,
     settings: &Settings,
@@ -261,11 +287,13 @@ where
     let mut film = Film::new(cam.width, cam.height);
     let tiles = film.tiles();
     let spp = settings.spp;
+    let (film_seed, first) = film_key(settings);
     let done: Vec<(Vec<f32>, Totals)> = tiles
         .par_iter()
         .map(|tile: &Tile| {
             control.check()?;
             let mut rng = Stream::new(settings.seed, settings.band, tile.index);
+            let mut subpixel = Stream::new(film_seed, settings.band, FILM_STREAM | tile.index);
             let mut scratch = Scratch::default();
             let mut px = Vec::with_capacity(TILE * TILE);
             for y in tile.y0..tile.y1 {
@@ -274,13 +302,13 @@ where
                 for x in tile.x0..tile.x1 {
                     let mut sum = 0.0;
                     // stratified sub-pixel positions: R2 points with a random rotation
-                    let shift = rng.uniform2();
+                    let shift = subpixel.uniform2();
                     for i in 0..spp {
                         // very high spp: check within a pixel too (an atomic load)
                         if i % 256 == 255 {
                             control.check()?;
                         }
-                        let [jx, jy] = r2_point(i, shift);
+                        let [jx, jy] = r2_point(first + i as u64, shift);
                         let ray = cam.ray(x as f64 + jx, y as f64 + jy);
                         sum += radiance(&ray, &mut rng, &mut scratch);
                     }

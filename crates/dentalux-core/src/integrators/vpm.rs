@@ -22,7 +22,7 @@
 //! | `kernel_clip` | true | clip the layer kernel (and the surface map's disc) by every other face within it, found by 8 rays: not only by the camera ray's entry and exit planes |
 //! | `step` Δx [mm] | per medium min(0.5 / σt, scene diagonal / 64); never below 1e-5 × diagonal | ray-marching step |
 //! | `light_strata` (VpmParams only) | 3 | an area light's direct light on a surface: 3 × 3 stratified samples |
-//! | `map_threshold` (VpmParams only) | 0.3 | below this eye transmittance a march step queries the map with probability T / 0.3 (weight 0.3 / T, systematic sampling along the ray) |
+//! | `map_threshold` (VpmParams only) | 0.3 | below this eye transmittance a march step (shadow rays and map query) is evaluated with probability T / 0.3 (weight 0.3 / T, systematic sampling along the ray) |
 //!
 //! Noise and speed on the Fig. 3 scene: docs/vpm-convergence.md ("Camera-pass noise and
 //! speed"), measured by the ignored test `fig3_noise_budget`.
@@ -79,11 +79,13 @@ pub struct VpmParams {
     /// hit left the lit checker with 30 % per-sample noise at fixed pixel positions
     /// (`fig3_noise_budget`), most of the camera pass's noise.
     pub light_strata: u32,
-    /// Transmittance from the eye below which a march step queries the volume photon map only
-    /// with probability T / `map_threshold` (weighted by its inverse: unbiased), the steps
-    /// chosen by systematic sampling along the ray with one uniform offset, so the number of
-    /// queries per ray hardly varies. 0 queries at every step. The map estimates of nearby
-    /// steps share most of their photons, so this trades little noise for fewer k-NN queries.
+    /// Transmittance from the eye below which a march step is evaluated (its shadow rays
+    /// for single scattering and its map query) only with probability T / `map_threshold`
+    /// (weighted by its inverse: unbiased), the steps chosen by systematic sampling along
+    /// the ray with one uniform offset, so the number of evaluated steps per ray hardly
+    /// varies. 0 evaluates every step. The map estimates of nearby steps share most of
+    /// their photons and single scattering varies smoothly along the ray, so this trades
+    /// little noise for fewer k-NN queries and shadow rays.
     pub map_threshold: f64,
     /// Shape of the density-estimation kernel in media: 0 a sphere (the paper's); otherwise
     /// a flat cylinder along the nearer of the camera ray's entry and exit planes, half-height
@@ -405,6 +407,17 @@ impl<'a> Vpm<'a> {
                 }
                 weight *= 2.0;
             }
+            let tw = (-sigma_t * s).exp() * weight;
+            let p_map = if self.params.map_threshold > 0.0 {
+                (tw / self.params.map_threshold).min(1.0)
+            } else {
+                1.0
+            };
+            let chosen = p_map >= 1.0 || (acc + p_map).floor() > acc.floor();
+            acc += p_map;
+            if !chosen {
+                continue;
+            }
             let x = ray.at(s);
             let mut src = 0.0;
             if self.params.mode == StoreMode::Paper {
@@ -419,15 +432,7 @@ impl<'a> Vpm<'a> {
                     }
                 }
             }
-            let tw = (-sigma_t * s).exp() * weight;
-            let p_map = if self.params.map_threshold > 0.0 {
-                (tw / self.params.map_threshold).min(1.0)
-            } else {
-                1.0
-            };
-            let chosen = p_map >= 1.0 || (acc + p_map).floor() > acc.floor();
-            acc += p_map;
-            if !map.is_empty() && chosen {
+            if !map.is_empty() {
                 // the nearer of the entry and exit planes orients the layer kernel
                 let depth = |p: &(Vec3, Vec3)| (p.0 - x).dot(p.1).abs();
                 let near = planes
@@ -461,9 +466,9 @@ impl<'a> Vpm<'a> {
                 };
                 sc.radius_sum += e.radius;
                 sc.estimates += 1;
-                src += e.value / p_map;
+                src += e.value;
             }
-            sum += tw * src * dx;
+            sum += tw * src / p_map * dx;
         }
         sum
     }
