@@ -2,8 +2,10 @@
 
 The reference is `volpath-nee` (unbiased: volpath with next-event estimation through the discs'
 flat faces), rendered as two independent halves so its per-pixel variance is known and removed
-from the squared error. vpm runs average independent passes (own photon maps and camera
-samples each). Error: sqrt(mean over pixels (I − T)² − mean var(T)) / mean(T), whole image.
+from the squared error. vpm runs average passes (own photon maps and camera paths each; one
+seed with pass_index 0, 1, ..., so each pixel's sub-pixel positions continue one stratified
+sequence, as `dentalux render --passes` does; `--independent` for independent seeds).
+Error: sqrt(mean over pixels (I − T)² − mean var(T)) / mean(T), whole image.
 The time plain `volpath` and `volpath-nee` need for the same error is extrapolated from their
 measured per-sample variance (t_spp · var_1spp / (e · mean)²).
 
@@ -47,6 +49,9 @@ def main() -> None:
                     help="fraction of volume photons aimed at the discs (default: the core's)")
     ap.add_argument("--kernel-clip", action=argparse.BooleanOptionalAction, default=None,
                     help="render option kernel_clip (default: the core's, on)")
+    ap.add_argument("--independent", action="store_true",
+                    help="vpm passes with independent seeds (default: one seed, pass_index "
+                         "0, 1, ...: the pixels' sub-pixel sequence continues across passes)")
     ap.add_argument("--truth-cache", default=None,
                     help="NPZ file: reuse the truth and the path tracers' variances stored "
                          "there by an earlier run with the same resolution and --ref-spp "
@@ -121,7 +126,7 @@ def main() -> None:
                   f"| {t1 / wall:.0f}x |", flush=True)
 
         passes(scene, res, 4096, 3000 + 100 * c, photons, k, spp, args.surface_photons,
-               budget=args.budget, on_pass=report, **aim)
+               budget=args.budget, on_pass=report, independent=args.independent, **aim)
 
 
 if __name__ == "__main__":

@@ -35,7 +35,8 @@ def test_single_ppm_passes_average_to_the_in_process_render():
     radii = []
     for p in range(5):
         image, s = _band(1, pass_index=p)
-        assert s["pass_first"] == p + 1 and s["photons_emitted"] == 7000
+        # the 2000 surface photons are the volume pass's first 2000 of its 5000
+        assert s["pass_first"] == p + 1 and s["photons_emitted"] == 5000
         # a pass after the first traces pass 1's maps once more to find r_1
         assert ("pilot_photons" in s) == (p > 0)
         acc += image

@@ -5,16 +5,20 @@ Each pass of each band is one task of :mod:`dentalux.distributed` (settings ``pa
 ``pass_index = p``). For ``ppm`` pass p is pass p + 1 of the Knaus–Zwicker schedule, with its
 own photon maps, seeds and radius (crates/dentalux-core/src/integrators/ppm.rs), so the mean
 of passes 0..N−1 is bit for bit the in-process ``passes = N`` render. Other integrators give
-every pass its own seed stream, so their passes are independent samples too.
+every pass its own seed stream (own photon maps and paths); only the pixels' sub-pixel
+positions continue one stratified sequence across passes.
 
 Passes run in rounds through an executor; results are added in key order (band, pass) into
 float64 running sums, so the image depends only on the number of passes, never on workers or
 completion order, and memory holds one H×W sum (and sum of squares) per band, not the passes.
 
-Error estimate (``error``, relative): passes are independent, so the variance of the mean
-image at a pixel is estimated by s²/N, with s² the sample variance of the N pass images at
-that pixel. The reported figure is, per band, the root mean over pixels of s²/N divided by
-the mean radiance of the band's image, and the largest over bands:
+Error estimate (``error``, relative): passes have their own photon maps and paths, so the
+variance of the mean image at a pixel is estimated by s²/N, with s² the sample variance of
+the N pass images at that pixel. (Their sub-pixel positions continue one stratified sequence
+per pixel, docs/render-contract.md: at edges the passes are slightly anti-correlated, and
+s²/N overestimates the noise there — a conservative estimate.) The reported figure is,
+per band, the root mean over pixels of s²/N divided by the mean radiance of the band's
+image, and the largest over bands:
 
     error = max_b sqrt(mean_px(s_b²) / N) / mean_px(mean image_b)
 

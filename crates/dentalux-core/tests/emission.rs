@@ -9,8 +9,9 @@ use dentalux_core::geometry::shapes::{Quad, Sphere};
 use dentalux_core::geometry::Vec3;
 use dentalux_core::integrators::aim::Aim;
 use dentalux_core::integrators::photon_trace::{
-    trace_emission, Emission, PhotonMaps, StoreMode, Targets,
+    trace_camera_maps, trace_emission, Emission, PhotonMaps, StoreMode, Targets,
 };
+use dentalux_core::integrators::render::Settings;
 use dentalux_core::lights::Light;
 use dentalux_core::medium::Medium;
 use dentalux_core::phase::PhaseFunction;
@@ -122,6 +123,7 @@ fn aimed_emission_keeps_the_stored_power() {
             photons,
             stored_cap: None,
             aim,
+            ..Emission::default()
         };
         let all = repeat(&scene, &e, VOLUME, 12, 1);
         for maps in &all {
@@ -171,6 +173,7 @@ fn aimed_emission_keeps_the_surface_power() {
             photons,
             stored_cap: None,
             aim,
+            ..Emission::default()
         };
         let all = repeat(&scene, &e, surface, 12, 100);
         let power: Vec<f64> = all.iter().map(|m| m.ledger.stored_surface).collect();
@@ -224,7 +227,7 @@ fn stored_budget_normalises_and_ignores_threads() {
     let emission = Emission {
         photons: 10_000_000,
         stored_cap: Some(cap),
-        aim: None,
+        ..Emission::default()
     };
     let run = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
@@ -253,4 +256,75 @@ fn stored_budget_normalises_and_ignores_threads() {
     );
     assert!((got - expect).abs() < 4.0 * se, "{got} vs {expect} ± {se}");
     assert!((one.ledger.emitted - phi).abs() < 1e-6 * phi);
+}
+
+/// The camera pass's surface map comes from `photons` emitted photons: the volume pass's
+/// own first `photons` when it emits that many (no second emission), and a surface pass for
+/// the rest when a stored budget stops the volume pass earlier. Either way its stored power
+/// matches a surface-only pass's, and so does its photon count.
+#[test]
+fn camera_maps_take_surface_photons_from_the_volume_pass() {
+    let scene = small_medium_scene();
+    let surface = Targets {
+        volume: false,
+        surface: true,
+    };
+    let plain = Emission {
+        photons: 400_000,
+        ..Emission::default()
+    };
+    let reference = repeat(&scene, &plain, surface, 12, 300);
+    let power: Vec<f64> = reference.iter().map(|m| m.ledger.stored_surface).collect();
+    let (p_ref, se_ref) = mean_se(&power);
+    let n_ref = reference.iter().map(|m| m.surface.len()).sum::<usize>() as f64 / 12.0;
+    let camera = |seed: u64, volume_stored: u64| {
+        let s = Settings {
+            volume_photons: 600_000,
+            volume_stored,
+            photons: 400_000,
+            seed,
+            ..Settings::default()
+        };
+        trace_camera_maps(&scene, &s, StoreMode::All, 0, &Control::new()).unwrap()
+    };
+    // 0: the volume pass emits 600 k, its first 400 k make the surface map; 20 000 stored:
+    // it stops after about 90 k and a surface pass emits the other 310 k
+    for budget in [0, 20_000] {
+        let maps: Vec<PhotonMaps> = (0..12).map(|seed| camera(seed, budget)).collect();
+        let power: Vec<f64> = maps.iter().map(|m| m.ledger.stored_surface).collect();
+        let (p, se_p) = mean_se(&power);
+        let in_map: f64 = maps[0]
+            .surface
+            .photons()
+            .iter()
+            .map(|p| p.power as f64)
+            .sum();
+        let n = maps.iter().map(|m| m.surface.len()).sum::<usize>() as f64 / 12.0;
+        let se = (se_ref * se_ref + se_p * se_p).sqrt();
+        eprintln!(
+            "budget {budget}: surface power {p:.5} ± {se_p:.5} vs a surface pass {p_ref:.5} ± \
+             {se_ref:.5}; photons {n:.0} vs {n_ref:.0}; emitted {}",
+            maps[0].emitted
+        );
+        assert!((p - p_ref).abs() < 4.0 * se, "{p} vs {p_ref} ± {se}");
+        assert!(
+            (in_map / power[0] - 1.0).abs() < 1e-4,
+            "{in_map} vs {}",
+            power[0]
+        );
+        // photon counts are Poisson-like: 4 standard errors of the two means
+        assert!(
+            (n - n_ref).abs() < 4.0 * (n / 12.0 + n_ref / 12.0).sqrt(),
+            "{n} vs {n_ref}"
+        );
+        let volume: usize = maps[0].volume.iter().map(|m| m.len()).sum();
+        if budget == 0 {
+            assert_eq!(maps[0].emitted, 600_000, "no second emission");
+        } else {
+            // the volume pass stopped at its budget; with the surface pass's photons the two
+            // emitted exactly `photons`
+            assert!((20_000..21_000).contains(&volume), "{volume}");
+            assert_eq!(maps[0].emitted, 400_000);
+        }
+    }
 }

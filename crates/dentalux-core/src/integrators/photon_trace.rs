@@ -173,6 +173,7 @@ impl BatchOut {
 
 /// Trace one batch of `count` photons (aimed at the media when `aim` is given); with
 /// `stop_at`, stop after the photon whose events bring the batch's volume maps to that many.
+/// `surface_left`: how many of the batch's photons may still store on surfaces.
 #[allow(clippy::too_many_arguments)]
 fn trace_batch(
     scene: &Scene,
@@ -182,6 +183,7 @@ fn trace_batch(
     targets: Targets,
     aim: Option<&Aim>,
     stop_at: Option<u64>,
+    surface_left: u64,
     rng: &mut Stream,
     control: &Control,
 ) -> BatchOut {
@@ -200,6 +202,7 @@ fn trace_batch(
                 break;
             }
         }
+        let on_surfaces = targets.surface && out.traced < surface_left;
         out.traced += 1;
         // a long random walk (huge optical depth) must still stop promptly on cancel
         if control.is_cancelled() {
@@ -263,7 +266,7 @@ fn trace_batch(
             };
             match scene.boundary(hit.shape) {
                 Boundary::Opaque { surface } => {
-                    if targets.surface && (scattered || specular) {
+                    if on_surfaces && (scattered || specular) {
                         out.surface.push(Photon::new(hit.p, ray.d, power));
                         led.stored_surface += power;
                     }
@@ -350,6 +353,9 @@ pub struct Emission {
     pub stored_cap: Option<u64>,
     /// Aim part of the photons at the media ([`Aim`]).
     pub aim: Option<Aim>,
+    /// Store surface photons (where `Targets::surface`) only from the first this many
+    /// photons emitted (in batch order); `None`: from every photon.
+    pub surface_first: Option<u64>,
 }
 
 /// [`trace_photons_with`] with a stored-photon budget and aimed emission.
@@ -382,8 +388,20 @@ pub fn trace_emission(
             let count = BATCH.min(photons - b * BATCH);
             let mut rng = Stream::new(seed, band, PHOTON_STREAM | tag | b);
             let aim = emission.aim.as_ref();
+            let surface_left = emission
+                .surface_first
+                .map_or(u64::MAX, |n| n.saturating_sub(b * BATCH));
             trace_batch(
-                scene, photons, count, mode, targets, aim, stop_at, &mut rng, control,
+                scene,
+                photons,
+                count,
+                mode,
+                targets,
+                aim,
+                stop_at,
+                surface_left,
+                &mut rng,
+                control,
             )
         };
         let outs: Vec<(u64, BatchOut)> = (start..end)
@@ -456,8 +474,14 @@ pub fn trace_emission(
 }
 
 /// The maps a camera pass needs: `settings.volume_photons` photons filling the volume maps
-/// (stream tag `tag`) and, from independent streams (`SURFACE_PASS | tag`), `settings.photons`
-/// more filling the surface map. Used by `vpm`/`vpm-full` (tag 0) and by each `ppm` pass.
+/// (stream tag `tag`), and a surface map from `settings.photons` emitted photons. Those are
+/// the volume pass's own first `photons` photons: their random walks are traced to the end
+/// anyway, so the surface photons they leave (light that crossed a disc and landed under
+/// it) cost nothing, where a separate surface pass traced every walk again. Only when the
+/// volume pass emits fewer (a `volume_stored` budget) does a surface pass
+/// (`SURFACE_PASS | tag`, independent streams) emit the rest; the two are then one emission
+/// of `photons` photons (both emit alike, aimed or not). Used by `vpm`/`vpm-full` (tag 0)
+/// and by each `ppm` pass.
 pub fn trace_camera_maps(
     scene: &Scene,
     settings: &crate::integrators::render::Settings,
@@ -466,44 +490,71 @@ pub fn trace_camera_maps(
     control: &Control,
 ) -> Result<PhotonMaps> {
     let (seed, band) = (settings.seed, settings.band);
-    let vol_only = Targets {
-        volume: true,
-        surface: false,
-    };
-    let surf_only = Targets {
-        volume: false,
-        surface: true,
-    };
     let emission = Emission {
         photons: settings.volume_photons,
         stored_cap: (settings.volume_stored > 0).then_some(settings.volume_stored),
         aim: Aim::new(scene, settings.aim),
+        surface_first: Some(settings.photons),
     };
-    let mut maps = trace_emission(scene, &emission, mode, vol_only, tag, seed, band, control)?;
-    // the surface pass is aimed too: the light that reaches a surface through a medium (under
-    // and behind a disc) is what its map is for, and unaimed only a few photons in a thousand
-    // go that way on the Fig. 3 discs
-    let surface_emission = Emission {
-        photons: settings.photons,
-        stored_cap: None,
-        aim: emission.aim,
-    };
-    let tag = SURFACE_PASS | tag;
-    let surf = trace_emission(
+    let mut maps = trace_emission(
         scene,
-        &surface_emission,
+        &emission,
         mode,
-        surf_only,
+        Targets::BOTH,
         tag,
         seed,
         band,
         control,
     )?;
-    maps.surface = surf.surface;
-    maps.emitted += surf.emitted;
-    // the volume-only trace stores nothing on surfaces: its ledger's surface entry is 0
-    maps.ledger.stored_surface = surf.ledger.stored_surface;
-    maps.trace_seconds += surf.trace_seconds;
-    maps.build_seconds += surf.build_seconds;
+    let from_volume = settings.photons.min(maps.emitted);
+    let rest = settings.photons - from_volume;
+    // progress counts `photons` surface photons as before (render.rs): these are done
+    control.add_done(from_volume);
+    let mut surface: Vec<Photon> = Vec::new();
+    if from_volume > 0 {
+        // the volume pass's photons carry Φ / (its photons emitted); as part of an emission
+        // of `photons` photons they carry Φ / photons
+        let w = maps.emitted as f64 / settings.photons as f64;
+        surface.extend(maps.surface.photons().iter().map(|p| scaled(p, w)));
+    }
+    if rest > 0 {
+        // the surface pass is aimed too: the light that reaches a surface through a medium
+        // (under and behind a disc) is what its map is for
+        let surface_emission = Emission {
+            photons: rest,
+            aim: emission.aim.clone(),
+            ..Emission::default()
+        };
+        let surf_only = Targets {
+            volume: false,
+            surface: true,
+        };
+        let tag = SURFACE_PASS | tag;
+        let surf = trace_emission(
+            scene,
+            &surface_emission,
+            mode,
+            surf_only,
+            tag,
+            seed,
+            band,
+            control,
+        )?;
+        let w = rest as f64 / settings.photons as f64;
+        surface.extend(surf.surface.photons().iter().map(|p| scaled(p, w)));
+        maps.emitted += surf.emitted;
+        maps.trace_seconds += surf.trace_seconds;
+    }
+    let t0 = Instant::now();
+    maps.ledger.stored_surface = surface.iter().map(|p| p.power as f64).sum();
+    maps.surface = PhotonMap::build(surface);
+    maps.build_seconds += t0.elapsed().as_secs_f64();
     Ok(maps)
+}
+
+/// `p` with its power times `w`.
+fn scaled(p: &Photon, w: f64) -> Photon {
+    let mut q = *p;
+    q.power = (p.power as f64 * w) as f32;
+    q
 }
