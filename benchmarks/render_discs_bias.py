@@ -28,7 +28,9 @@ def main() -> None:
     ap.add_argument("--photons", type=int, default=2_000_000)
     ap.add_argument("--k", type=int, default=50)
     ap.add_argument("--spp", type=int, default=4)
-    ap.add_argument("--surface-photons", type=int, default=200_000)
+    ap.add_argument("--surface-photons", type=int, default=None,
+                    help="photons for the surface map (default: --photons; taken from the "
+                         "volume pass up to that count)")
     ap.add_argument("--integrator", default="vpm")
     ap.add_argument("--kernel-clip", action=argparse.BooleanOptionalAction, default=True,
                     help="render option kernel_clip (default on, as the core's)")
@@ -54,7 +56,7 @@ def main() -> None:
     extra = {k: v for k, v in (("aim", args.aim), ("volume_stored", args.volume_stored))
              if v is not None}
     img, var, done, wall = passes(scene_dict(False), res, args.passes, 3000, args.photons,
-                                  args.k, args.spp, args.surface_photons,
+                                  args.k, args.spp, args.surface_photons or args.photons,
                                   integrator=args.integrator, kernel_clip=args.kernel_clip,
                                   independent=args.independent, **extra)
     if args.save:

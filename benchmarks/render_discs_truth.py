@@ -44,7 +44,10 @@ def main() -> None:
     ap.add_argument("--budget", type=float, default=60.0, help="seconds per vpm configuration")
     ap.add_argument("--configs", default="4000000:200:4,8000000:100:4,16000000:50:4")
     ap.add_argument("--ppm", default="", help="photons:k:spp:alpha,... (ppm integrator)")
-    ap.add_argument("--surface-photons", type=int, default=200_000)
+    ap.add_argument("--surface-photons", type=int, default=None,
+                    help="photons for the surface map (default: as many as the volume "
+                         "photons; the core takes them from the volume pass, so they cost "
+                         "nothing up to that count)")
     ap.add_argument("--aim", type=float, default=None,
                     help="fraction of volume photons aimed at the discs (default: the core's)")
     ap.add_argument("--kernel-clip", action=argparse.BooleanOptionalAction, default=None,
@@ -103,7 +106,8 @@ def main() -> None:
         while True:
             img, _, wall = render(scene, res, integrator="ppm", spp=int(spp), seed=5000 + c,
                                   volume_photons=int(float(photons)),
-                                  photons=args.surface_photons, k=int(k), passes=n,
+                                  photons=args.surface_photons or int(float(photons)),
+                                  k=int(k), passes=n,
                                   alpha=float(alpha), **aim)
             e = err(img)
             t1, t2 = cost(e) if e > 0 else (float("inf"),) * 2
@@ -125,7 +129,8 @@ def main() -> None:
                   f"| {(img.mean() - level) / level:+.4f} | {t1:.0f} | {t2:.0f} "
                   f"| {t1 / wall:.0f}x |", flush=True)
 
-        passes(scene, res, 4096, 3000 + 100 * c, photons, k, spp, args.surface_photons,
+        passes(scene, res, 4096, 3000 + 100 * c, photons, k, spp,
+               args.surface_photons or photons,
                budget=args.budget, on_pass=report, independent=args.independent, **aim)
 
 
