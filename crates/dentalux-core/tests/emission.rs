@@ -24,6 +24,11 @@ const VOLUME: Targets = Targets {
     surface: false,
 };
 
+const SURFACE: Targets = Targets {
+    volume: false,
+    surface: true,
+};
+
 fn medium(mua: f64, mus: f64, g: f64, n: f64) -> Medium {
     let phase = PhaseFunction::hg_with_isotropic(g, 0.0).unwrap();
     Medium::new("", mua, mus, n, phase).unwrap()
@@ -164,10 +169,6 @@ fn aimed_emission_keeps_the_stored_power() {
 #[test]
 fn aimed_emission_keeps_the_surface_power() {
     let scene = small_medium_scene();
-    let surface = Targets {
-        volume: false,
-        surface: true,
-    };
     let run = |aim: Option<Aim>, photons: u64| {
         let e = Emission {
             photons,
@@ -175,7 +176,7 @@ fn aimed_emission_keeps_the_surface_power() {
             aim,
             ..Emission::default()
         };
-        let all = repeat(&scene, &e, surface, 12, 100);
+        let all = repeat(&scene, &e, SURFACE, 12, 100);
         let power: Vec<f64> = all.iter().map(|m| m.ledger.stored_surface).collect();
         (
             mean_se(&power),
@@ -265,15 +266,11 @@ fn stored_budget_normalises_and_ignores_threads() {
 #[test]
 fn camera_maps_take_surface_photons_from_the_volume_pass() {
     let scene = small_medium_scene();
-    let surface = Targets {
-        volume: false,
-        surface: true,
-    };
     let plain = Emission {
         photons: 400_000,
         ..Emission::default()
     };
-    let reference = repeat(&scene, &plain, surface, 12, 300);
+    let reference = repeat(&scene, &plain, SURFACE, 12, 300);
     let power: Vec<f64> = reference.iter().map(|m| m.ledger.stored_surface).collect();
     let (p_ref, se_ref) = mean_se(&power);
     let n_ref = reference.iter().map(|m| m.surface.len()).sum::<usize>() as f64 / 12.0;
