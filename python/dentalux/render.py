@@ -118,8 +118,9 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
 
     integrator: pm | path | vpm | vpm-full | volpath | ppm (default: the scene's
     ``render.integrator``, else ``vpm`` for scenes with dielectric media and ``pm``
-    otherwise). spp: samples per pixel; photons: surface photons; seed: random seed;
-    threads: worker threads (default all cores; the image does not depend on it);
+    otherwise). spp: samples per pixel; photons: photons for the surface map (the volume
+    integrators take them from the volume pass); seed: random seed; threads: worker
+    threads (default all cores; the image does not depend on it);
     resolution: (width, height) or "WxH", overriding the camera's. ``options``:
     volume_photons, volume_stored (photons the volume maps should hold: emission stops there,
     at most volume_photons), aim (fraction of volume photons aimed at the media, [0, 1)),

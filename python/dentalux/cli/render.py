@@ -49,7 +49,8 @@ def render_command(
     scene_file: Path = typer.Argument(..., help="scene file (TOML)"),
     out: Path = typer.Option(..., "--out", help="output folder"),
     spp: int = typer.Option(None, help="samples per pixel (default: the scene's render.spp)"),
-    photons: int = typer.Option(None, help="surface photons per band"),
+    photons: int = typer.Option(
+        None, help="photons per band for the surface map (vpm: the volume pass's first N)"),
     volume_photons: int = typer.Option(None, help="volume photons per band (vpm, vpm-full)"),
     volume_stored: int = typer.Option(
         None, "--volume-stored",
