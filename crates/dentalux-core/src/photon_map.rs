@@ -288,6 +288,15 @@ fn inside_planes(planes: &[(Vec3, Vec3)], d: Vec3) -> bool {
     planes.iter().all(|(o, nrm)| (d - *o).dot(*nrm) < 0.0)
 }
 
+/// ∫1, ∫z, ∫z² over a prism of cross-section `area` and z ∈ [a, b].
+fn prism_moments(area: f64, a: f64, b: f64) -> [f64; 3] {
+    [
+        area * (b - a),
+        area * (b * b - a * a) / 2.0,
+        area * (b * b * b - a * a * a) / 3.0,
+    ]
+}
+
 /// The fraction of the disc of radius `r` about the origin of the (s, t) plane that lies
 /// inside every plane (offset, outward normal; z ignored): a 512-point quadrature in
 /// radius² and angle, rotated by `u` ∈ [0, 1).
@@ -354,10 +363,10 @@ impl KernelClip<'_> {
     /// axis `n`, z ∈ [a, b] measured along n from x; `None` when no other face lies in it.
     fn moments(&self, x: Vec3, n: Vec3, a: f64, b: f64, big_r: f64) -> Option<[f64; 3]> {
         let frame = Frame::from_axis(n);
-        let local = |rho: f64, phi: f64, z: f64| Vec3::new(rho * phi.cos(), rho * phi.sin(), z);
+        let rays = rotated_circle::<CLIP_RAYS>(self.u);
         let (planes, count) = self.faces(x, &frame, big_r, |j| {
-            let phi = 2.0 * PI * (j as f64 + self.u) / CLIP_RAYS as f64;
-            local(big_r, phi, if j % 2 == 0 { a } else { b })
+            let [c, s] = rays[j];
+            Vec3::new(big_r * c, big_r * s, if j % 2 == 0 { a } else { b })
         });
         if count == 0 {
             return None;
@@ -366,12 +375,7 @@ impl KernelClip<'_> {
         let disc = PI * big_r * big_r;
         let m = if planes.iter().all(|(_, nrm)| nrm.z.abs() < 1e-6) {
             // cross-section A (its area by quadrature) times [a, b]
-            let area = disc * disc_fraction_inside(planes, big_r, self.u);
-            [
-                area * (b - a),
-                area * (b * b - a * a) / 2.0,
-                area * (b * b * b - a * a * a) / 3.0,
-            ]
+            prism_moments(disc * disc_fraction_inside(planes, big_r, self.u), a, b)
         } else {
             let [nz, nr, na] = CLIP_GRID_3D;
             let dirs = rotated_circle::<{ CLIP_GRID_3D[2] }>(self.u);
@@ -435,6 +439,14 @@ impl PhotonMap {
     /// Total stored power Σ ΔΦ_p.
     pub fn total_power(&self) -> f64 {
         self.photons.iter().map(|p| p.power as f64).sum()
+    }
+
+    /// Multiply every photon's power by `w` (the tree orders photons by position only, so it
+    /// stays valid).
+    pub fn scale_powers(&mut self, w: f64) {
+        for p in &mut self.photons {
+            p.power = (p.power as f64 * w) as f32;
+        }
     }
 
     /// The (at most) `k` photons nearest to `x` within `r_max` [mm], into `out`.
@@ -660,15 +672,10 @@ impl PhotonMap {
             s1 += w * z;
             e.count += 1;
         });
-        let area = PI * big_r2;
         let [v, m1, m2] = planes
             .clip
             .and_then(|c| c.moments(x, n, a, b, big_r2.sqrt()))
-            .unwrap_or([
-                area * (b - a),
-                area * (b * b - a * a) / 2.0,
-                area * (b * b * b - a * a * a) / 3.0,
-            ]);
+            .unwrap_or_else(|| prism_moments(PI * big_r2, a, b));
         let det = v * m2 - m1 * m1;
         // radiance is not negative: a fit that extrapolates below 0 (few photons, steep
         // gradient) is clamped. That biases upwards only where it happens; with k ≥ 64 it is
@@ -745,9 +752,9 @@ impl PhotonMap {
         }
         let (r, unbias) = knn_radius(nb, k, r_max);
         let frame = Frame::from_axis(n);
+        let rays = rotated_circle::<CLIP_RAYS>(clip.u);
         let (planes, count) = clip.faces(x, &frame, r, |j| {
-            let phi = 2.0 * PI * (j as f64 + clip.u) / CLIP_RAYS as f64;
-            Vec3::new(r * phi.cos(), r * phi.sin(), 0.0)
+            Vec3::new(r * rays[j][0], r * rays[j][1], 0.0)
         });
         let planes = &planes[..count];
         let (area, unbias) = if count == 0 {
@@ -1070,6 +1077,55 @@ mod tests {
         }
     }
 
+    /// The clip tests' verdict: the clipped estimates' mean is `expect` within 4 standard
+    /// errors, the plain estimates' mean lies beyond 4 of theirs on the side `sign` (−1: too
+    /// dark, +1: too bright).
+    fn assert_clip_corrects(plain: &[f64], clipped: &[f64], expect: f64, sign: f64) {
+        let (m, se) = mean_se(clipped);
+        assert!(
+            (m - expect).abs() < 4.0 * se,
+            "clipped: {m} ± {se} vs {expect}"
+        );
+        let (m0, se0) = mean_se(plain);
+        assert!(
+            sign * (m0 - expect) > 4.0 * se0,
+            "plain: {m0} ± {se0} vs {expect}"
+        );
+    }
+
+    /// Four maps, map i built from `photons(Stream::new(seed, 0, i))`.
+    fn four_maps(seed: u64, photons: impl Fn(&mut Stream) -> Vec<Photon>) -> Vec<PhotonMap> {
+        (0..4)
+            .map(|i| PhotonMap::build(photons(&mut Stream::new(seed, 0, i))))
+            .collect()
+    }
+
+    /// The clip tests' points: 16 per map, 0.05 mm outside the wall x = 0 ([`wall_at_x0`]),
+    /// y from −4 to 3.5 mm, height `z`; `estimate(map, x, clip)` returns the plain and the
+    /// clipped estimate there, the clip rotated by a uniform from `Stream::new(seed, 0, 0)`.
+    fn along_the_wall(
+        maps: &[PhotonMap],
+        z: f64,
+        seed: u64,
+        mut estimate: impl FnMut(&PhotonMap, Vec3, &KernelClip) -> (f64, f64),
+    ) -> (Vec<f64>, Vec<f64>) {
+        let mut rng = Stream::new(seed, 0, 0);
+        let (mut plain, mut clipped) = (Vec::new(), Vec::new());
+        for map in maps {
+            for q in 0..16 {
+                let x = Vec3::new(0.05, -4.0 + 0.5 * q as f64, z);
+                let clip = KernelClip {
+                    hit: &wall_at_x0,
+                    u: rng.uniform(),
+                };
+                let (a, b) = estimate(map, x, &clip);
+                plain.push(a);
+                clipped.push(b);
+            }
+        }
+        (plain, clipped)
+    }
+
     #[test]
     fn clipped_layer_kernel_is_right_at_a_rim() {
         // uniform photons in the quarter-space x > 0, z < 0 (a disc's rim: top face z = 0,
@@ -1079,52 +1135,30 @@ mod tests {
         // (found by the clip's rays) it is right within 4 standard errors (4 maps × 16
         // points).
         let n = 400_000;
-        let maps: Vec<PhotonMap> = (0..4)
-            .map(|seed| {
-                let mut s = Stream::new(31, 0, seed);
-                PhotonMap::build(
-                    (0..n)
-                        .map(|_| {
-                            let p = Vec3::new(s.uniform(), s.uniform() - 0.5, -s.uniform()) * 10.0;
-                            Photon::new(p, uniform_sphere(s.uniform2()), 1.0 / n as f64)
-                        })
-                        .collect(),
-                )
-            })
-            .collect();
+        let maps = four_maps(31, |s| {
+            (0..n)
+                .map(|_| {
+                    let p = Vec3::new(s.uniform(), s.uniform() - 0.5, -s.uniform()) * 10.0;
+                    Photon::new(p, uniform_sphere(s.uniform2()), 1.0 / n as f64)
+                })
+                .collect()
+        });
         let expect = 1.0 / 1000.0 / (4.0 * PI);
         let iso = PhaseFunction::Isotropic;
         let mut nb = Neighbours::new();
-        let mut rng = Stream::new(5, 0, 0);
-        let (mut plain, mut clipped) = (Vec::new(), Vec::new());
-        for map in &maps {
-            for q in 0..16 {
-                let x = Vec3::new(0.05, -4.0 + 0.5 * q as f64, -0.05);
-                let mut planes = Planes {
-                    near: (Vec3::new(x.x, x.y, 0.0), Vec3::Z),
-                    far: None,
-                    clip: None,
-                };
-                let e = map.volume_radiance_layer(x, Vec3::Z, &iso, 100, 5.0, 0.3, planes, &mut nb);
-                plain.push(e.value);
-                planes.clip = Some(KernelClip {
-                    hit: &wall_at_x0,
-                    u: rng.uniform(),
-                });
-                let e = map.volume_radiance_layer(x, Vec3::Z, &iso, 100, 5.0, 0.3, planes, &mut nb);
-                clipped.push(e.value);
-            }
-        }
-        let (m, se) = mean_se(&clipped);
-        assert!(
-            (m - expect).abs() < 4.0 * se,
-            "clipped: {m} ± {se} vs {expect}"
-        );
-        let (m0, se0) = mean_se(&plain);
-        assert!(
-            m0 < expect - 4.0 * se0,
-            "unclipped: {m0} ± {se0} vs {expect}"
-        );
+        let (plain, clipped) = along_the_wall(&maps, -0.05, 5, |map, x, clip| {
+            let mut planes = Planes {
+                near: (Vec3::new(x.x, x.y, 0.0), Vec3::Z),
+                far: None,
+                clip: None,
+            };
+            let e = map.volume_radiance_layer(x, Vec3::Z, &iso, 100, 5.0, 0.3, planes, &mut nb);
+            planes.clip = Some(*clip);
+            let c = map.volume_radiance_layer(x, Vec3::Z, &iso, 100, 5.0, 0.3, planes, &mut nb);
+            (e.value, c.value)
+        });
+        // too dark unclipped
+        assert_clip_corrects(&plain, &clipped, expect, -1.0);
     }
 
     #[test]
@@ -1134,42 +1168,25 @@ mod tests {
         // k-NN disc takes in the dense side and reads high; clipped by the wall it is right
         // within 4 standard errors (4 maps × 16 points).
         let n_out = 200_000;
-        let maps: Vec<PhotonMap> = (0..4)
-            .map(|seed| {
-                let mut s = Stream::new(37, 0, seed);
-                let mut v = Vec::new();
-                for (x0, count) in [(0.0, n_out), (-10.0, 10 * n_out)] {
-                    for _ in 0..count {
-                        let p = Vec3::new(x0 + 10.0 * s.uniform(), 10.0 * s.uniform() - 5.0, 0.0);
-                        v.push(Photon::new(p, -Vec3::Z, 1.0 / n_out as f64));
-                    }
+        let maps = four_maps(37, |s| {
+            let mut v = Vec::new();
+            for (x0, count) in [(0.0, n_out), (-10.0, 10 * n_out)] {
+                for _ in 0..count {
+                    let p = Vec3::new(x0 + 10.0 * s.uniform(), 10.0 * s.uniform() - 5.0, 0.0);
+                    v.push(Photon::new(p, -Vec3::Z, 1.0 / n_out as f64));
                 }
-                PhotonMap::build(v)
-            })
-            .collect();
+            }
+            v
+        });
         let expect = 1.0 / 100.0; // irradiance outside: power per mm²
         let mut nb = Neighbours::new();
-        let mut rng = Stream::new(6, 0, 0);
-        let (mut plain, mut clipped) = (Vec::new(), Vec::new());
-        for map in &maps {
-            for q in 0..16 {
-                let x = Vec3::new(0.05, -4.0 + 0.5 * q as f64, 0.0);
-                plain.push(map.surface_irradiance(x, Vec3::Z, 100, 5.0, &mut nb).value);
-                let clip = KernelClip {
-                    hit: &wall_at_x0,
-                    u: rng.uniform(),
-                };
-                let e = map.surface_irradiance_clipped(x, Vec3::Z, 100, 5.0, &mut nb, &clip);
-                clipped.push(e.value);
-            }
-        }
-        let (m, se) = mean_se(&clipped);
-        assert!(
-            (m - expect).abs() < 4.0 * se,
-            "clipped: {m} ± {se} vs {expect}"
-        );
-        let (m0, se0) = mean_se(&plain);
-        assert!(m0 > expect + 4.0 * se0, "plain: {m0} ± {se0} vs {expect}");
+        let (plain, clipped) = along_the_wall(&maps, 0.0, 6, |map, x, clip| {
+            let e = map.surface_irradiance(x, Vec3::Z, 100, 5.0, &mut nb).value;
+            let c = map.surface_irradiance_clipped(x, Vec3::Z, 100, 5.0, &mut nb, clip);
+            (e, c.value)
+        });
+        // too bright unclipped
+        assert_clip_corrects(&plain, &clipped, expect, 1.0);
     }
 
     #[test]

@@ -126,7 +126,6 @@ fn aimed_emission_keeps_the_stored_power() {
     let run = |aim: Option<Aim>, photons: u64| {
         let e = Emission {
             photons,
-            stored_cap: None,
             aim,
             ..Emission::default()
         };
@@ -172,7 +171,6 @@ fn aimed_emission_keeps_the_surface_power() {
     let run = |aim: Option<Aim>, photons: u64| {
         let e = Emission {
             photons,
-            stored_cap: None,
             aim,
             ..Emission::default()
         };

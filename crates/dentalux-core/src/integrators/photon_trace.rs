@@ -64,8 +64,8 @@ impl Targets {
     };
 }
 
-/// Tag of the streams of a second, surface-only photon pass (`vpm` traces `volume_photons`
-/// for the volume maps and `photons` for the surface map, from independent streams).
+/// Tag of the streams of the surface-only photon pass that completes a camera pass's surface
+/// map when a stored budget stopped the volume pass before `photons` ([`trace_camera_maps`]).
 pub const SURFACE_PASS: u64 = 1 << 44;
 
 /// Where the emitted power went (sums of photon powers, same units as light power Φ).
@@ -510,12 +510,11 @@ pub fn trace_camera_maps(
     let rest = settings.photons - from_volume;
     // progress counts `photons` surface photons as before (render.rs): these are done
     control.add_done(from_volume);
-    let mut surface: Vec<Photon> = Vec::new();
     if from_volume > 0 {
         // the volume pass's photons carry Φ / (its photons emitted); as part of an emission
-        // of `photons` photons they carry Φ / photons
-        let w = maps.emitted as f64 / settings.photons as f64;
-        surface.extend(maps.surface.photons().iter().map(|p| scaled(p, w)));
+        // of `photons` photons they carry Φ / photons (its tree stands: powers do not move it)
+        maps.surface
+            .scale_powers(maps.emitted as f64 / settings.photons as f64);
     }
     if rest > 0 {
         // the surface pass is aimed too: the light that reaches a surface through a medium
@@ -530,7 +529,7 @@ pub fn trace_camera_maps(
             surface: true,
         };
         let tag = SURFACE_PASS | tag;
-        let surf = trace_emission(
+        let mut surf = trace_emission(
             scene,
             &surface_emission,
             mode,
@@ -540,21 +539,18 @@ pub fn trace_camera_maps(
             band,
             control,
         )?;
-        let w = rest as f64 / settings.photons as f64;
-        surface.extend(surf.surface.photons().iter().map(|p| scaled(p, w)));
+        surf.surface
+            .scale_powers(rest as f64 / settings.photons as f64);
+        let t0 = Instant::now();
+        let pooled = (maps.surface.photons().iter())
+            .chain(surf.surface.photons())
+            .copied()
+            .collect();
+        maps.surface = PhotonMap::build(pooled);
         maps.emitted += surf.emitted;
         maps.trace_seconds += surf.trace_seconds;
+        maps.build_seconds += surf.build_seconds + t0.elapsed().as_secs_f64();
     }
-    let t0 = Instant::now();
-    maps.ledger.stored_surface = surface.iter().map(|p| p.power as f64).sum();
-    maps.surface = PhotonMap::build(surface);
-    maps.build_seconds += t0.elapsed().as_secs_f64();
+    maps.ledger.stored_surface = maps.surface.total_power();
     Ok(maps)
-}
-
-/// `p` with its power times `w`.
-fn scaled(p: &Photon, w: f64) -> Photon {
-    let mut q = *p;
-    q.power = (p.power as f64 * w) as f32;
-    q
 }

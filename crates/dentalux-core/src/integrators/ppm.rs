@@ -11,8 +11,9 @@
 //! at the mean density of pass 1's map (half the `vpm` default cap).
 //!
 //! Every scattering event is stored (the `vpm-full` rule), so single scattering is exact
-//! through refraction. Streams: pass p traces photons with tag p·2³² (surface pass: plus
-//! [`SURFACE_PASS`]) and renders its camera pass with seed `seed ^ (p << 40)`.
+//! through refraction. Streams: pass p traces photons with tag p·2³² (a surface pass, when
+//! one is needed: plus [`SURFACE_PASS`]) and renders its camera pass with seed
+//! `seed ^ (p << 40)`.
 
 use crate::control::Control;
 use crate::error::Result;
@@ -48,7 +49,7 @@ pub fn pass_seed(seed: u64, pass: u32) -> u64 {
 pub const PASS_SHIFT: u32 = 40;
 
 /// The photon maps of pass `pass` (1-based): `settings.volume_photons` volume photons with
-/// tag `pass · 2³²` and `settings.photons` surface photons with tag `SURFACE_PASS | pass · 2³²`.
+/// tag `pass · 2³²`, the surface map from `settings.photons` of them (`trace_camera_maps`).
 fn trace_pass(
     scene: &Scene,
     settings: &Settings,

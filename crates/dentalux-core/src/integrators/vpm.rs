@@ -550,7 +550,7 @@ impl<'a> Vpm<'a> {
 }
 
 /// Render a band with volume photon mapping: `settings.volume_photons` photons fill the volume
-/// maps, `settings.photons` more (independent streams) the surface map; `full` selects
+/// maps, `settings.photons` of them (`trace_camera_maps`) the surface map; `full` selects
 /// `vpm-full` (single scattering in the map) over `vpm` (single scattering by eqs. 12–13).
 pub fn render(
     scene: &Scene,
