@@ -16,6 +16,7 @@ from dentalux.cli import render as render_cli
 from dentalux.cli import scene as scene_cli
 from dentalux.cli import shade as shade_cli
 from dentalux.cli import tooth as tooth_cli
+from dentalux.cli import version as version_cli
 
 app = typer.Typer(
     add_completion=False,
@@ -33,6 +34,7 @@ plot_cli.register(app)
 fit_cli.register(app)
 render_cli.register(app)
 scene_cli.register(app)
+version_cli.register(app)
 
 
 class UserError(Exception):

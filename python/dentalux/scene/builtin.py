@@ -1,10 +1,29 @@
 """Built-in scenes as plain dicts (the TOML format's keys), like ``mi.cornell_box()``.
 
 ``scenes/cornell.toml`` and ``scenes/discs.toml`` hold the same scenes as files; a test
-checks that each resolves to the same render-contract JSON as its function here.
+checks that each resolves to the same render-contract JSON as its function here. The files
+live in the package (``dentalux/scenes``, shipped in the wheel; the checkout's ``scenes/`` is
+a link to that folder), so :func:`scene_file` finds them in any install.
 """
 
 from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+SCENE_FILES = ("cornell", "discs")
+"""Built-in scenes that also ship as TOML files (``dentalux/scenes/NAME.toml``)."""
+
+
+def scene_file(name: str) -> Path:
+    """The packaged TOML file of a built-in scene: ``scene_file("discs")`` is the path to
+    give ``dentalux render`` or :func:`dentalux.load_scene` from any folder."""
+    if name not in SCENE_FILES:
+        raise ValueError(f"scene = {name!r}: allowed {', '.join(SCENE_FILES)}")
+    path = Path(str(resources.files("dentalux") / "scenes" / f"{name}.toml"))
+    if not path.is_file():
+        raise FileNotFoundError(f"packaged scene {name}.toml is missing from {path.parent}")
+    return path
 
 # Spectral reflectances of the Cornell box walls (smooth red and green dyes, our own
 # round numbers): linear interpolation between the points, 400-700 nm.
