@@ -607,7 +607,8 @@ def test_cli_render_kernel_clip_flag(fake_core, tmp_path):
     for flag, value in (([], True), (["--no-kernel-clip"], False), (["--kernel-clip"], True)):
         with pytest.raises(SystemExit) as exc:
             main(["render", str(CORNELL), "--out", str(tmp_path / "o"), "--spp", "1",
-                  "--photons", "10", "--bands", "540", "--resolution", "4x3", *flag])
+                  "--photons", "10", "--bands", "540", "--resolution", "4x3", "--overwrite",
+                  *flag])
         assert exc.value.code == 0
         assert fake_core.calls[-1][1]["kernel_clip"] is value
 

@@ -20,7 +20,6 @@ CIEDE2000) come from colour-science; this module only chooses the conventions:
 
 from __future__ import annotations
 
-import json
 from functools import lru_cache
 from pathlib import Path
 
@@ -276,5 +275,7 @@ def write_images(radiance, wavelengths_nm, out_dir, illuminant="D65", regions=No
         lab = cs.spectrum_to_Lab(mean, wl, reconstruction)
         summary["regions"][name] = {"rect": [int(v) for v in rect], "lab": lab.tolist(),
                                     "mean_radiance": mean.tolist()}
-    Path(paths["json"]).write_text(json.dumps(summary, indent=2))
+    from dentalux.outputs import dumps_strict
+
+    Path(paths["json"]).write_text(dumps_strict(summary, indent=2))
     return summary

@@ -100,21 +100,37 @@ class DaskExecutor:
             ) from exc
         self.cluster = None
         if address.startswith("local:"):
+            from dentalux.limits import WORKERS_PER_CORE, logical_cores, max_workers
+
             try:
                 n = int(address.split(":", 1)[1])
             except ValueError:
                 n = 0
             if n < 1:
                 raise ValueError(f"cluster = {address!r}: 'local:N' needs an integer N >= 1")
-            self.cluster = LocalCluster(
-                n_workers=n,
-                threads_per_worker=threads_per_worker,
-                processes=True,
-                dashboard_address=None,
-            )
-            self.client = Client(self.cluster)
+            if n > max_workers():
+                raise ValueError(
+                    f"cluster = {address!r}: N is out of range: allowed 1 ... {max_workers()} "
+                    f"workers ({WORKERS_PER_CORE} x the {logical_cores()} logical cores)")
+            try:
+                self.cluster = LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=threads_per_worker,
+                    processes=True,
+                    dashboard_address=None,
+                )
+                self.client = Client(self.cluster)
+            except BaseException:
+                if self.cluster is not None:
+                    self.cluster.close()
+                raise
         elif address.startswith("tcp://"):
-            self.client = Client(address, timeout="20s")
+            check_reachable(address)
+            try:
+                self.client = Client(address, timeout="20s")
+            except (OSError, TimeoutError) as exc:
+                raise ValueError(f"cluster = {address!r}: cannot connect to a Dask scheduler "
+                                 f"there ({exc})") from None
         else:
             raise ValueError(
                 f"cluster = {address!r}: allowed 'local:N' or 'tcp://HOST:PORT'"
@@ -166,6 +182,29 @@ def _task_token(task: Task) -> str:
     for part in (repr(task.key), task.scene_json, task.settings_json):
         h.update(part.encode())
     return h.hexdigest()[:24]
+
+
+def check_reachable(address: str, timeout: float = 5.0) -> None:
+    """Refuse ``tcp://HOST:PORT`` at once when nothing listens there (instead of a
+    20-second wait and an ``OSError`` traceback)."""
+    import socket
+    from urllib.parse import urlsplit
+
+    try:
+        parts = urlsplit(address)
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host, port = None, None
+    if not host or port is None:
+        raise ValueError(f"cluster = {address!r}: expected tcp://HOST:PORT, e.g. "
+                         "tcp://127.0.0.1:8786")
+    try:
+        with socket.create_connection((host, port), timeout=timeout):
+            pass
+    except OSError as exc:
+        why = exc.strerror or str(exc) or type(exc).__name__
+        raise ValueError(f"cluster = {address!r}: no Dask scheduler reachable at "
+                         f"{host}:{port} ({why})") from None
 
 
 def make_executor(cluster: str | None) -> LocalExecutor | DaskExecutor:

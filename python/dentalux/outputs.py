@@ -5,6 +5,7 @@ and render.json. Shared by ``dentalux render`` and ``dentalux figures``."""
 from __future__ import annotations
 
 import json
+import math
 import resource
 import sys
 from pathlib import Path
@@ -12,6 +13,28 @@ from pathlib import Path
 import numpy as np
 
 from dentalux.scene.resolve import Scene, d65_relative
+
+
+def json_safe(x):
+    """Copy of ``x`` with every non-finite float (inf, NaN) replaced by ``None`` and numpy
+    scalars and arrays turned into Python numbers and lists."""
+    if isinstance(x, np.generic):
+        x = x.item()
+    if isinstance(x, np.ndarray):
+        x = x.tolist()
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: json_safe(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [json_safe(v) for v in x]
+    return x
+
+
+def dumps_strict(obj, **kw) -> str:
+    """Standard JSON (RFC 8259): non-finite numbers become ``null``, never ``Infinity`` or
+    ``NaN``."""
+    return json.dumps(json_safe(obj), allow_nan=False, **kw)
 
 
 def peak_memory_bytes() -> int:
@@ -102,5 +125,5 @@ def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None =
         if warn:
             warn(f"warning: no colour image: {exc}")
     summary["peak_memory_bytes"] = peak_memory_bytes()
-    (out / "render.json").write_text(json.dumps(summary, indent=2))
+    (out / "render.json").write_text(dumps_strict(summary, indent=2))
     return summary

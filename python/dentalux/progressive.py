@@ -292,6 +292,9 @@ def render_progressive(scene, stop: StopRule, executor=None, integrator: str | N
     settings = build_settings(sc, integrator=integrator, spp=spp, photons=photons, seed=seed,
                               threads=threads, **options)
     res = _resolution(resolution) or sc.resolution
+    from dentalux.limits import check_render
+
+    check_render(settings, res[0], res[1], len(band_list))
     executor = executor or LocalExecutor()
     task_threads = getattr(executor, "task_threads", None)
     if task_threads is not None:
@@ -324,5 +327,9 @@ def render_progressive(scene, stop: StopRule, executor=None, integrator: str | N
         "progressive": prog,
     }
     radiance = np.stack(out.images, axis=-1).astype(np.float32, copy=False)
+    from dentalux.render import check_finite
+
+    for b, wl in enumerate(band_list):
+        check_finite(radiance[:, :, b], wl)
     return RenderResult(radiance=radiance, bands=band_list, stats=stats, scene_hash=sc.hash,
                         settings=dict(settings, passes=out.passes))

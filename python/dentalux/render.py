@@ -17,11 +17,11 @@ import json
 import os
 import time
 from dataclasses import dataclass, field
-from numbers import Real
+from numbers import Integral, Real
 
 import numpy as np
 
-from dentalux import _core
+from dentalux import _core, limits
 from dentalux.progress import bar
 from dentalux.scene.load import as_scene
 from dentalux.scene.resolve import Scene
@@ -58,6 +58,19 @@ class RenderResult:
     settings: dict = field(default_factory=dict)
 
 
+def check_finite(image: np.ndarray, wavelength_nm: float) -> None:
+    """Refuse a band image with inf or NaN pixels: some input overflowed float32 (a light's
+    radiance or intensity, a transform's scale, a coefficient) and no image or JSON should
+    be written from it."""
+    bad = ~np.isfinite(image)
+    if bad.any():
+        raise ValueError(
+            f"the render at {wavelength_nm:g} nm has {int(bad.sum())} non-finite pixel(s) "
+            f"(inf or NaN) of {image.size}: an input overflows (the largest float32 is "
+            f"{float(np.finfo(np.float32).max):.3g}); check the lights' radiance and "
+            "intensity and the transforms' scale")
+
+
 def core_render_band():
     """The native ``render_band``, or a clear error while the core lacks it."""
     fn = getattr(_core, "render_band", None)
@@ -85,7 +98,7 @@ def _resolution(resolution) -> tuple[int, int] | None:
         except (TypeError, ValueError):
             raise ValueError(f"resolution = {resolution!r}: expected (width, height)") from None
     for name, x in (("width", w), ("height", h)):
-        if isinstance(x, bool) or not isinstance(x, int) or x < 1:
+        if isinstance(x, bool) or not isinstance(x, Integral) or x < 1:
             raise ValueError(f"resolution {name} = {x!r}: out of range, allowed integer >= 1")
     return int(w), int(h)
 
@@ -144,6 +157,7 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     res = _resolution(resolution) or sc.resolution
     render_band = core_render_band()
     w, h = res
+    limits.check_render(settings, w, h, len(band_list))
     # The core's progress(done) counts photons traced plus pixels finished (render.rs).
     work = max(1, photons_traced(settings) * settings["passes"] + w * h)
     images, per_band, seconds = [], [], []
@@ -162,6 +176,7 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
                                        tick if cb is not None else None)
             seconds.append(time.perf_counter() - start)
             image = np.asarray(image, dtype=np.float32)
+            check_finite(image, wl)
             if image.shape != (h, w):
                 raise RuntimeError(f"render_band returned an image of shape {image.shape}, "
                                    f"expected {(h, w)}")

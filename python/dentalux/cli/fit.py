@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
+from dentalux import limits
 from dentalux.inverse import fit, fit_table, write_spectrum_toml
+from dentalux.inverse.table import check_spectrum_rows, read_table
+from dentalux.output_paths import atomic_file, check_out_file
+from dentalux.outputs import dumps_strict
 
 
 def _print_results(results) -> None:
@@ -30,6 +33,21 @@ def _print_results(results) -> None:
             Console(stderr=True).print(f"note: {note}")
 
 
+def write_checked_spectrum(results, out: Path, name: str, **kw) -> None:
+    """Write the spectrum TOML atomically, and only if the material library reads it back
+    (what ``shade`` and ``render`` will do with it)."""
+    from dentalux import materials
+
+    with atomic_file(out, "--out") as tmp:
+        write_spectrum_toml(results, tmp, name, **kw)
+        try:
+            materials.load(tmp)
+        except ValueError as exc:
+            msg = str(exc).replace(str(tmp), str(out))
+            raise ValueError(f"--out = '{out}': the fitted spectrum would not load as a "
+                             f"material ({msg}); nothing was written") from None
+
+
 def fit_command(
     tt: float = typer.Option(None, help="total transmittance (fraction)"),
     tr: float = typer.Option(None, help="total reflectance (fraction, specular included)"),
@@ -44,15 +62,24 @@ def fit_command(
     tt_err: float = typer.Option(0.005, help="absolute uncertainty of TT"),
     tr_err: float = typer.Option(0.005, help="absolute uncertainty of TR"),
     tol: float = typer.Option(None, help="fit tolerance on TT/TR (default 0.001 for mc)"),
-    photons: int = typer.Option(400_000, help="photons per Monte Carlo evaluation (mc)"),
+    photons: int = typer.Option(
+        400_000, help=f"photons per Monte Carlo evaluation (mc; 1000 ... "
+                      f"{limits.MAX_FIT_PHOTONS:.0e})"),
     seed: int = typer.Option(1, help="random seed of the Monte Carlo evaluations (mc)"),
     table: Path = typer.Option(None, help="CSV: wavelength_nm,tt,tr,n,g,thickness_mm[,fd,...]"),
-    out: Path = typer.Option(None, help="material spectrum TOML to write (with --table)"),
+    out: str = typer.Option(
+        None, help="material spectrum TOML to write (with --table; replaced if it exists)"),
     name: str = typer.Option(None, help="material name in the TOML (default: file stem)"),
     description: str = typer.Option("", help="material description in the TOML"),
     as_json: bool = typer.Option(False, "--json", help="print JSON"),
 ) -> None:
     """Find μa and μs [1/mm] from total transmittance and reflectance of a disc."""
+    if model == "mc":
+        limits.check_count(photons, "--photons", limits.MAX_FIT_PHOTONS, lo=1000)
+    if out is not None:
+        if table is None:
+            raise ValueError("--out needs --table (a spectral batch)")
+        out = check_out_file(out, "--out", (".toml",))
     opts = dict(model=model, fd=fd, n_outside=n_outside, tr_diffuse_only=tr_diffuse_only,
                 tt_err=tt_err, tr_err=tr_err, tol=tol, photons=photons, seed=seed)
     if table is not None:
@@ -62,28 +89,28 @@ def fit_command(
             raise ValueError(f"--table reads tt, tr, n, g, thickness per row; drop --"
                              f"{', --'.join(given)}")
         opts.pop("fd")
+        if out is not None:
+            check_spectrum_rows(read_table(table), str(table))
         results = fit_table(table, progress=None if not as_json else False, fd=fd, **{
             k: v for k, v in opts.items() if k != "model"}, model=model)
         if out is not None:
-            write_spectrum_toml(results, out, name or out.stem, source=table.name,
-                                description=description)
+            write_checked_spectrum(results, out, name or out.stem, source=table.name,
+                                   description=description)
         if as_json:
-            print(json.dumps([dict(r.to_json(), wavelength_nm=r.wavelength_nm)
-                              for r in results]))
+            print(dumps_strict([dict(r.to_json(), wavelength_nm=r.wavelength_nm)
+                                for r in results]))
         else:
             _print_results(results)
             if out is not None:
                 Console().print(f"wrote {out}")
         return
-    if out is not None:
-        raise ValueError("--out needs --table (a spectral batch)")
     missing = [k for k, v in (("tt", tt), ("tr", tr), ("n", n), ("g", g),
                               ("thickness", thickness)) if v is None]
     if missing:
         raise ValueError(f"missing --{', --'.join(missing)} (or give --table)")
     result = fit(tt=tt, tr=tr, n=n, g=g, thickness=thickness, **opts)
     if as_json:
-        print(json.dumps(result.to_json()))
+        print(dumps_strict(result.to_json()))
     else:
         _print_results([result])
 

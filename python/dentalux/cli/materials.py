@@ -134,15 +134,22 @@ def plot_material(m: lib.Material, out: Path, lo: float = 380.0, hi: float = 780
 @materials_app.command("plot")
 def plot_command(
     name: str = typer.Argument(..., help="material name, name@variant or a TOML path"),
-    out: Path = typer.Option(None, "--out", "-o", help="PNG file (default: NAME.png)"),
+    out: str = typer.Option(
+        None, "--out", "-o", help="image file, .png, .svg or .pdf (default: NAME.png; "
+                                  "replaced if it exists)"),
     lo: float = typer.Option(380.0, "--from", help="first wavelength [nm]"),
     hi: float = typer.Option(780.0, "--to", help="last wavelength [nm]"),
 ) -> None:
     """Plot μa, μs and g over wavelength to a PNG."""
+    from dentalux.output_paths import atomic_file, check_out_file
+
     m = lib.get(name)
     if out is None:
-        out = Path(m.name.replace("@", "_").replace("/", "_") + ".png")
-    print(plot_material(m, out, lo, hi))
+        out = m.name.replace("@", "_").replace("/", "_") + ".png"
+    out = check_out_file(out, "--out", (".png", ".svg", ".pdf"))
+    with atomic_file(out, "--out") as tmp:
+        plot_material(m, tmp, lo, hi)
+    print(out)
 
 
 def register(app: typer.Typer) -> None:

@@ -7,19 +7,23 @@ import json
 import typer
 
 from dentalux import plots
+from dentalux.output_paths import check_out_dir, rebase, staged_dir
 
 FIGURES = {"spd": plots.fig2_spd}
 
 
 def plot_command(
     figure: str = typer.Argument(..., help="which figure: spd (the paper's Fig. 2)"),
-    out: str = typer.Option(".", help="output directory"),
+    out: str = typer.Option(
+        ".", help="output folder (its files of the figure's names are replaced)"),
     as_json: bool = typer.Option(False, "--json", help="print the written paths as JSON"),
 ) -> None:
     """Draw a figure and write it as PNG and SVG into --out."""
     if figure not in FIGURES:
         raise ValueError(f"figure = {figure!r}: allowed {', '.join(FIGURES)}")
-    paths = FIGURES[figure](out)
+    out = check_out_dir(out, "--out", overwrite=True)
+    with staged_dir(out, "--out") as stage:
+        paths = rebase(FIGURES[figure](stage), stage, out)
     print(json.dumps(paths) if as_json else "\n".join(paths.values()))
 
 

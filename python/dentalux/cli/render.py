@@ -8,7 +8,6 @@ hash, bands, settings, timings, photon counts, peak memory) and a grey PNG previ
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 import time
@@ -16,7 +15,8 @@ from pathlib import Path
 
 import typer
 
-from dentalux.outputs import peak_memory_bytes, write_render_outputs
+from dentalux.output_paths import check_out_dir, rebase, staged_dir
+from dentalux.outputs import dumps_strict, peak_memory_bytes, write_render_outputs
 from dentalux.render import render
 from dentalux.scene.load import load_scene
 
@@ -47,7 +47,10 @@ def parse_resolution(text: str | None) -> tuple[int, int] | None:
 
 def render_command(
     scene_file: Path = typer.Argument(..., help="scene file (TOML)"),
-    out: Path = typer.Option(..., "--out", help="output folder"),
+    out: str = typer.Option(..., "--out", help="output folder: new or empty (see --overwrite)"),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="write into a non-empty --out folder, replacing the files "
+                                   "of the same names"),
     spp: int = typer.Option(None, help="samples per pixel (default: the scene's render.spp)"),
     photons: int = typer.Option(
         None, help="photons per band for the surface map (vpm: the volume pass's first N)"),
@@ -94,6 +97,7 @@ def render_command(
 ) -> None:
     """Render a scene to DIR/radiance.npy, DIR/render.json and PNG previews."""
     t0 = time.perf_counter()
+    out = check_out_dir(out, "--out", overwrite=overwrite)
     scene = load_scene(scene_file)
     band_list = parse_bands(bands)
     options = {k_: v for k_, v in (("volume_photons", volume_photons),
@@ -111,15 +115,18 @@ def render_command(
     else:
         result = render(scene, **common)
     warn = None if as_json else (lambda msg: print(msg, file=sys.stderr))
-    summary = write_render_outputs(scene, result, out, scene_file=str(scene_file), warn=warn)
-    if progressive:
-        summary["progressive"] = _finite(result.stats["progressive"])
-        summary["radius_last"] = summary["progressive"]["radius_last"]
-    summary["timings"]["total_s"] = time.perf_counter() - t0
-    summary["peak_memory_bytes"] = peak_memory_bytes()
-    (out / "render.json").write_text(json.dumps(summary, indent=2))
+    with staged_dir(out, "--out") as stage:
+        summary = write_render_outputs(scene, result, stage, scene_file=str(scene_file),
+                                       warn=warn)
+        summary = rebase(summary, stage, out)
+        if progressive:
+            summary["progressive"] = _finite(result.stats["progressive"])
+            summary["radius_last"] = summary["progressive"]["radius_last"]
+        summary["timings"]["total_s"] = time.perf_counter() - t0
+        summary["peak_memory_bytes"] = peak_memory_bytes()
+        (stage / "render.json").write_text(dumps_strict(summary, indent=2))
     if as_json:
-        print(json.dumps(summary))
+        print(dumps_strict(summary))
     else:
         mean = [float(x) for x in result.radiance.reshape(-1, len(result.bands)).mean(axis=0)]
         print(f"{scene_file}: {result.radiance.shape[1]}x{result.radiance.shape[0]} px, "

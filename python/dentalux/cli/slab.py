@@ -7,7 +7,6 @@ exit-angle histograms (fractions of the incident power per bin).
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +14,9 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from dentalux import limits
+from dentalux.output_paths import atomic_file, check_out_file
+from dentalux.outputs import dumps_strict
 from dentalux.slab import SCALARS, Layer, simulate
 
 
@@ -36,12 +38,10 @@ def _parse_layer(spec: str, index: int) -> Layer:
 
 
 def _check_profile_options(radial_bins: int, radial_max: float, angle_bins: int) -> None:
-    if radial_bins < 1:
-        raise ValueError(f"--radial-bins = {radial_bins} is out of range: allowed >= 1")
+    limits.check_count(radial_bins, "--radial-bins", limits.MAX_RADIAL_BINS)
     if not radial_max > 0 or radial_max == float("inf"):
         raise ValueError(f"--radial-max = {radial_max} is out of range: allowed (0, inf) mm")
-    if angle_bins < 1:
-        raise ValueError(f"--angle-bins = {angle_bins} is out of range: allowed >= 1")
+    limits.check_count(angle_bins, "--angle-bins", limits.MAX_ANGLE_BINS)
 
 
 def write_profiles(path: Path, result, radial_max: float, angle_bins: int) -> None:
@@ -90,19 +90,29 @@ def slab_command(
     n_below: float = typer.Option(1.0, help="refractive index below the slab"),
     incidence: str = typer.Option("normal", help="normal | diffuse | angle:DEG"),
     estimator: str = typer.Option("analog", help="analog | weighted"),
-    photons: int = typer.Option(1_000_000, help="photons to launch"),
+    photons: int = typer.Option(
+        1_000_000, help=f"photons to launch (1 ... {limits.MAX_SLAB_PHOTONS:.0e})"),
     seed: int = typer.Option(1, help="random seed"),
-    threads: int = typer.Option(None, help="worker threads (default: all cores)"),
+    threads: int = typer.Option(
+        None, help=f"worker threads, 1 ... {limits.THREADS_PER_CORE} x the logical cores "
+                   "(default: all cores)"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
-    profiles: Path = typer.Option(
-        None, help="write R(r), T(r) and exit-angle histograms to this .npz file"
+    profiles: str = typer.Option(
+        None, help="write R(r), T(r) and exit-angle histograms to this .npz file (replaced "
+                   "if it exists)"
     ),
-    radial_bins: int = typer.Option(100, help="rings of the radial profiles"),
+    radial_bins: int = typer.Option(
+        100, help=f"rings of the radial profiles (1 ... {limits.MAX_RADIAL_BINS:,})"),
     radial_max: float = typer.Option(10.0, help="outer radius of the radial profiles [mm]"),
-    angle_bins: int = typer.Option(18, help="exit-angle bins over [0, 90) degrees"),
+    angle_bins: int = typer.Option(
+        18, help=f"exit-angle bins over [0, 90) degrees (1 ... {limits.MAX_ANGLE_BINS:,})"),
 ) -> None:
     """Simulate a layered slab: reflectance, transmittance and absorption with errors."""
     _check_profile_options(radial_bins, radial_max, angle_bins)
+    limits.check_slab(photons, threads, radial_bins if profiles else None,
+                      angle_bins if profiles else None, prefix="--", seed=seed)
+    if profiles is not None:
+        profiles = check_out_file(profiles, "--profiles", (".npz",))
     if layer:
         if any(v is not None for v in (mua, mus, thickness)):
             raise ValueError("give either --layer (repeatable) or --mua/--mus/--thickness")
@@ -119,15 +129,18 @@ def slab_command(
                       angular_bins=angle_bins if profiles else None,
                       progress=None if not as_json else False)
     if profiles:
-        write_profiles(profiles, result, radial_max, angle_bins)
+        with atomic_file(profiles, "--profiles") as tmp:
+            write_profiles(tmp, result, radial_max, angle_bins)
     if as_json:
         d = result.to_dict()
         for k in ("radial_reflectance", "radial_transmittance", "angular_reflectance",
                   "angular_transmittance"):
             d.pop(k)
-        print(json.dumps(d))
+        print(dumps_strict(d))
     else:
         print_result_table(result, "slab")
+        if profiles:
+            print(f"wrote {profiles}")
 
 
 def register(app: typer.Typer) -> None:

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 import typer
 
 from dentalux import teeth
+from dentalux.output_paths import check_out_dir, rebase, staged_dir
+from dentalux.outputs import dumps_strict
 
 tooth_app = typer.Typer(
     no_args_is_help=True,
@@ -15,13 +14,16 @@ tooth_app = typer.Typer(
 )
 
 
-def _run(kind: str, out: Path, resolution: float, as_json: bool) -> None:
+def _run(kind: str, out: str, resolution: float, as_json: bool,
+         overwrite: bool = False) -> None:
+    out = check_out_dir(out, "--out", overwrite=overwrite)
     build = {"incisor": teeth.incisor, "molar": teeth.molar}[kind]
     tooth = build(resolution=resolution)
-    doc = tooth.write(out)
+    with staged_dir(out, "--out") as stage:
+        doc = rebase(tooth.write(stage), stage, out)
     doc["out"] = str(out)
     if as_json:
-        print(json.dumps(doc))
+        print(dumps_strict(doc))
         return
     d, tgt = doc["dimensions"], doc["targets"]
     print(f"{kind}: {doc['enamel']['triangles']} + {doc['dentin']['triangles']} triangles, "
@@ -35,22 +37,28 @@ def _run(kind: str, out: Path, resolution: float, as_json: bool) -> None:
 
 @tooth_app.command("incisor")
 def incisor_command(
-    out: Path = typer.Option(Path("incisor"), "--out", "-o", help="output directory"),
+    out: str = typer.Option("incisor", "--out", "-o",
+                            help="output folder: new or empty (see --overwrite)"),
     resolution: float = typer.Option(0.2, help="marching-cubes grid spacing [mm]"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
+    overwrite: bool = typer.Option(False, "--overwrite",
+                                   help="write into a non-empty --out folder"),
 ) -> None:
     """A maxillary central incisor (crown 8.7 x 10.2 mm)."""
-    _run("incisor", out, resolution, as_json)
+    _run("incisor", out, resolution, as_json, overwrite)
 
 
 @tooth_app.command("molar")
 def molar_command(
-    out: Path = typer.Option(Path("molar"), "--out", "-o", help="output directory"),
+    out: str = typer.Option("molar", "--out", "-o",
+                            help="output folder: new or empty (see --overwrite)"),
     resolution: float = typer.Option(0.2, help="marching-cubes grid spacing [mm]"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
+    overwrite: bool = typer.Option(False, "--overwrite",
+                                   help="write into a non-empty --out folder"),
 ) -> None:
     """A maxillary first molar (crown 10.0 x 11.0 x 7.5 mm, three roots)."""
-    _run("molar", out, resolution, as_json)
+    _run("molar", out, resolution, as_json, overwrite)
 
 
 def register(app: typer.Typer) -> None:

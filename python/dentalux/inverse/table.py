@@ -75,6 +75,23 @@ def read_table(source) -> list[dict[str, float]]:
     return out
 
 
+def check_spectrum_rows(rows: list[dict[str, float]], origin: str = "table") -> None:
+    """Rows that become one material spectrum: each wavelength once, each a positive
+    finite number (what the material library demands of ``wavelength_nm``)."""
+    seen: dict[float, int] = {}
+    for i, row in enumerate(rows):
+        wl = row["wavelength_nm"]
+        if not (math.isfinite(wl) and wl > 0):
+            raise ValueError(f"table {origin!r} row {i + 1}: wavelength_nm = {wl!r} is out of "
+                             "range: allowed a positive number of nm")
+        if wl in seen:
+            raise ValueError(f"table {origin!r}: rows {seen[wl] + 1} and {i + 1} are both at "
+                             f"wavelength_nm = {wl:g}; a material spectrum needs each "
+                             "wavelength once (average the measurements, or fit without "
+                             "--out)")
+        seen[wl] = i
+
+
 def _columns_to_rows(cols: Mapping) -> list[dict]:
     keys = list(cols)
     lengths = {len(cols[k]) for k in keys}

@@ -635,7 +635,10 @@ def validate_settings(d: dict, path: str = "settings") -> dict:
     if "kernel_layer" in out:
         out["kernel_layer"] = number(out["kernel_layer"], p("kernel_layer"), lo=0.0, hi=1.0)
     if out.get("threads") is not None:
+        from dentalux.limits import check_threads
+
         out["threads"] = integer(out["threads"], p("threads"), lo=1)
+        check_threads(out["threads"], p("threads"))
     return out
 
 

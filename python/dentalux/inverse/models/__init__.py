@@ -61,7 +61,7 @@ def get_model(name: str, **options):
         from dentalux.inverse.models.mc import MonteCarlo
 
         return MonteCarlo(
-            photons=options.get("photons") or 400_000,
+            photons=400_000 if options.get("photons") is None else options["photons"],
             seed=1 if options.get("seed") is None else options["seed"],
             estimator=options.get("estimator") or "weighted",
         )

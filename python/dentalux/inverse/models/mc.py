@@ -19,8 +19,9 @@ class MonteCarlo:
     name = "mc"
 
     def __init__(self, photons: int = 400_000, seed: int = 1, estimator: str = "weighted"):
-        if isinstance(photons, bool) or not isinstance(photons, int) or photons < 1000:
-            raise ValueError(f"photons = {photons!r} is out of range: allowed integer >= 1000")
+        from dentalux.limits import MAX_FIT_PHOTONS, as_int
+
+        photons = as_int(photons, "photons", 1000, MAX_FIT_PHOTONS)
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
             raise ValueError(f"seed = {seed!r} is out of range: allowed integer >= 0")
         if estimator not in ("weighted", "analog"):
