@@ -13,6 +13,7 @@ from dentalux.cli import fit as fit_cli
 from dentalux.cli import materials as materials_cli
 from dentalux.cli import plot as plot_cli
 from dentalux.cli import render as render_cli
+from dentalux.cli import report as report_cli
 from dentalux.cli import scene as scene_cli
 from dentalux.cli import shade as shade_cli
 from dentalux.cli import tooth as tooth_cli
@@ -35,6 +36,7 @@ fit_cli.register(app)
 render_cli.register(app)
 scene_cli.register(app)
 version_cli.register(app)
+report_cli.register(app)
 
 
 class UserError(Exception):

@@ -1,0 +1,281 @@
+"""A shade report a lab can send: one self-contained HTML file (``dentalux report``).
+
+:func:`build` gathers, for each material (a library name or a TOML file, as for ``dentalux
+shade``), the object ``dentalux shade --json`` prints for the same arguments (through
+:func:`shade_json`, the one place that asks :mod:`dentalux.dental`), the disc's spectra, its
+optical coefficients, TP against thickness and its provenance; :func:`write` renders them with
+the jinja2 template ``templates/report.html.j2`` (package data) into one HTML file with the
+charts embedded as base64 PNG (:mod:`dentalux.report.charts`), so it opens with no network.
+
+Every leaf of the shade JSON (``lab_white.L``, ``tp00``, ``verdict``, and whatever
+``instrument``, ``edge_loss`` or ``shade_match`` keys the installed dentalux gives) appears in
+the page in a cell marked ``data-key`` (the JSON path) and ``data-value`` (the value as JSON
+prints it); the text shown is that value rounded (:data:`DIGITS`).
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import json
+import math
+import os
+import platform
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from dentalux import dental
+
+#: decimals shown for each JSON key (the full value is in the cell's data-value)
+DIGITS = {"lab_black": 2, "lab_white": 2, "lab_transmitted": 2, "tp": 2, "tp00": 2,
+          "cr": 4, "op": 2, "delta_e00": 2, "delta_tp00": 2}
+LAB_ROWS = (("lab_black", "over black"), ("lab_white", "over white"),
+            ("lab_transmitted", "transmitted"))
+SCALAR_ROWS = (("tp", "TP (ΔE*ab, black against white)"),
+               ("tp00", "TP00 (ΔE00, black against white)"),
+               ("cr", "CR = Y over black / Y over white"),
+               ("op", "OP (Δa*b*, transmitted against over black)"))
+COMPARE_KEYS = ("delta_e00", "delta_tp00", "verdict")
+SECTION_KEYS = ("instrument", "edge_loss", "shade_match")
+#: thickness factors of the TP-vs-thickness chart when none are given (times --thickness)
+TP_FACTORS = (0.25, 0.5, 1.0, 1.5, 2.0)
+FIGURE_SUFFIXES = {".png": (b"\x89PNG\r\n\x1a\n", "image/png"),
+                   ".jpg": (b"\xff\xd8\xff", "image/jpeg"), ".jpeg": (b"\xff\xd8\xff",
+                                                                   "image/jpeg")}
+
+
+def shade_json(material, thickness: float, against=None, instrument=None, **kw) -> dict:
+    """The object ``dentalux shade --json`` prints for these arguments.
+
+    ``kw``: the keyword arguments of :func:`dentalux.dental.metrics` (bands, backings,
+    contact, photons, seed, estimator, observer, illuminant, threads)."""
+    kw.setdefault("progress", False)
+    shade = getattr(dental, "shade", None)
+    if shade is not None:
+        return shade(material, thickness, against=against, instrument=instrument, **kw)
+    if instrument is not None:  # instruments arrive with issue 9's dental.shade
+        raise ValueError(f"--instrument = {instrument!r}: this dentalux knows no instruments "
+                         "yet (infinite geometry only)")
+    m = dental.metrics(material, thickness, **kw)
+    out = m.to_json()
+    if against:
+        cmp = dental.compare(m, dental.metrics(against, thickness, **kw))
+        out.update({k: cmp[k] for k in COMPARE_KEYS})
+    return out
+
+
+def _leaves(obj, prefix: str = "") -> list[tuple[str, object]]:
+    """(JSON path, value) of every number/string/bool/null under ``obj``; Lab triples get
+    the component names (``lab_white.L``), other lists their index."""
+    if isinstance(obj, dict):
+        out = []
+        for k, v in obj.items():
+            out += _leaves(v, f"{prefix}.{k}" if prefix else str(k))
+        return out
+    if isinstance(obj, list | tuple):
+        names = "Lab" if len(obj) == 3 and prefix.rsplit(".", 1)[-1].startswith("lab") else None
+        out = []
+        for i, v in enumerate(obj):
+            out += _leaves(v, f"{prefix}.{names[i] if names else i}")
+        return out
+    return [(prefix, obj)]
+
+
+def _cell(key: str, value, digits: int | None = None) -> dict:
+    """One table cell: the JSON path, the value as JSON writes it, and the text shown."""
+    raw = json.dumps(value)
+    if isinstance(value, float):
+        text = f"{value:.{digits}f}" if digits is not None else f"{value:.4g}"
+    elif value is None:
+        text = "—"
+    else:
+        text = str(value)
+    return {"key": key, "value": raw if not isinstance(value, str) else value, "text": text}
+
+
+def _generic_rows(obj, prefix: str) -> list[dict]:
+    """Key/value rows of a JSON section of unknown shape (instrument, edge loss, ...)."""
+    rows = []
+    for path, value in _leaves(obj, prefix):
+        label = path[len(prefix) + 1:] if path.startswith(prefix + ".") else path
+        rows.append({"label": label or prefix, "cell": _cell(path, value)})
+    return rows
+
+
+def _provenance(mat) -> dict:
+    """What the page says about where a material's values came from."""
+    prov = dict(getattr(mat, "provenance", {}) or {})
+    values = prov.pop("values", {}) or {}
+    scaling = prov.pop("scaling", []) or []
+    rows = []
+    for q in ("wavelength_nm", "mua", "mus", "g", "fd", "n"):
+        entry = values.get(q)
+        if entry is None:
+            continue
+        if isinstance(entry, list):
+            for lam, text in zip(mat.wavelength_nm, entry, strict=False):
+                rows.append({"quantity": f"{q} at {lam:g} nm", "text": text})
+        else:
+            rows.append({"quantity": q, "text": entry})
+    data = None
+    if hasattr(mat, "wavelength_nm"):
+        data = [{"wavelength_nm": f"{lam:g}", **{q: f"{getattr(mat, q)[i]:.6g}"
+                                                 for q in ("mua", "mus", "g", "fd", "n")}}
+                for i, lam in enumerate(mat.wavelength_nm)]
+    return {"name": getattr(mat, "name", "material"),
+            "description": getattr(mat, "description", ""),
+            "fields": [{"key": k, "text": v if isinstance(v, str) else json.dumps(v)}
+                       for k, v in prov.items()],
+            "value_rows": rows, "scaling": [json.dumps(s) for s in scaling], "data": data}
+
+
+def _tp_thicknesses(thickness: float, given) -> list[float]:
+    ts = [thickness * f for f in TP_FACTORS] if given is None else [float(t) for t in given]
+    if not ts or not all(math.isfinite(t) and t > 0 for t in ts):
+        raise ValueError(f"--tp-thicknesses = {given!r}: need thicknesses > 0 [mm]")
+    return sorted(set(ts) | {float(thickness)})
+
+
+def _figure(path) -> dict:
+    """A rendered image to embed (``--figure``): PNG or JPEG, checked by its magic bytes."""
+    p = Path(path)
+    kind = FIGURE_SUFFIXES.get(p.suffix.lower())
+    if kind is None:
+        raise ValueError(f"--figure = {str(path)!r}: allowed a .png or .jpg file")
+    if not p.is_file():
+        raise FileNotFoundError(f"--figure: file not found: {path}")
+    blob = p.read_bytes()
+    if not blob.startswith(kind[0]):
+        raise ValueError(f"--figure = {str(path)!r}: not a {p.suffix.lower()[1:]} image")
+    return {"name": p.name, "src": f"data:{kind[1]};base64,{base64.b64encode(blob).decode()}"}
+
+
+def build(materials, thickness: float, against=None, instrument=None, tp_thicknesses=None,
+          figure=None, command: str | None = None, **kw) -> dict:
+    """Everything the report shows, as plain data for the template (see module doc)."""
+    from dentalux import __version__
+    from dentalux.report import charts
+
+    if isinstance(materials, str | Path) or not materials:
+        materials = [materials] if materials else []
+    if not materials:
+        raise ValueError("materials: give at least one material (a name or a TOML file)")
+    kw = {k: v for k, v in kw.items() if v is not None or k == "contact"}
+    kw["progress"] = False
+    ts = _tp_thicknesses(float(thickness), tp_thicknesses)
+    figure = _figure(figure) if figure is not None else None
+    specs = list(materials) + ([against] if against else [])
+    mats = {str(s): dental._resolve_material(s) for s in specs}
+    sections = []
+    for spec in materials:
+        out = shade_json(spec, thickness, against=against, instrument=instrument, **kw)
+        m = dental.metrics(spec, thickness, **kw)  # the disc's spectra (infinite geometry)
+        tp = []
+        for t in ts:
+            j = out if t == float(thickness) else shade_json(spec, t, instrument=instrument,
+                                                              **kw)
+            tp.append((t, j["tp"], j["tp00"]))
+        sections.append({"spec": str(spec), "json": out, "metrics": m, "tp": tp})
+    ref_metrics = dental.metrics(against, thickness, **kw) if against else None
+
+    pages = []
+    for s in sections:
+        out = s["json"]
+        lab = [{"label": label, "cells": [_cell(f"{key}.{c}", x, DIGITS[key])
+                                          for c, x in zip("Lab", out[key], strict=True)]}
+               for key, label in LAB_ROWS if key in out]
+        scalars = [{"label": label, "cell": _cell(key, out[key], DIGITS[key])}
+                   for key, label in SCALAR_ROWS if key in out]
+        compare = None
+        if "delta_e00" in out:
+            compare = {"delta_e00": _cell("delta_e00", out["delta_e00"], DIGITS["delta_e00"]),
+                       "verdict": _cell("verdict", out.get("verdict")),
+                       "delta_tp00": _cell("delta_tp00", out.get("delta_tp00"),
+                                           DIGITS["delta_tp00"]),
+                       "translucency_verdict": dental.translucency_verdict(out["delta_tp00"])
+                       if isinstance(out.get("delta_tp00"), float) else "—"}
+        shown = {k for k, _ in LAB_ROWS + SCALAR_ROWS} | set(COMPARE_KEYS) | set(SECTION_KEYS)
+        pages.append({
+            "spec": s["spec"], "name": mats[s["spec"]].name,
+            "lab": lab, "scalars": scalars, "compare": compare,
+            "sections": [{"key": k, "rows": _generic_rows(out[k], k)}
+                         for k in SECTION_KEYS if k in out],
+            "other": [r for k in out if k not in shown for r in _generic_rows(out[k], k)],
+            "json_text": json.dumps(out, indent=1),
+        })
+    inputs = {"materials": ", ".join(map(str, materials)), "thickness [mm]": f"{thickness:g}",
+              "against": against or "—", "instrument": instrument or "— (infinite geometry)",
+              **{k: ("air gap" if k == "contact" and v is None else
+                     ", ".join(f"{x:g}" for x in v) if isinstance(v, list | tuple | np.ndarray)
+                     else str(v)) for k, v in kw.items() if k != "progress"},
+              "TP chart thicknesses [mm]": ", ".join(f"{t:g}" for t in ts)}
+    labelled = [(mats[s["spec"]].name, s["metrics"]) for s in sections]
+    if ref_metrics is not None:
+        labelled.append((f"{mats[str(against)].name} (reference)", ref_metrics))
+    return {
+        "title": "dentalux shade report: " + ", ".join(mats[str(m)].name for m in materials),
+        "version": __version__,
+        "generated": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "python": platform.python_version(),
+        "command": command,
+        "seed": kw.get("seed", 1),
+        "thickness": float(thickness), "against": against,
+        "instrument": instrument,
+        "geometry": None if any("instrument" in s["json"] for s in sections) else
+        "infinite geometry: a laterally infinite disc on an ideal Lambertian backing, normal "
+        "illumination, all reflected light collected (SCI); no instrument aperture or edge loss",
+        "pt": dental.PT, "at": dental.AT, "tpt": dental.TPT, "tat": dental.TAT,
+        "inputs": inputs, "pages": pages,
+        "charts": [charts.spectra(labelled),
+                   charts.optics([(m.name, m) for m in mats.values()]),
+                   charts.tp_thickness([(mats[s["spec"]].name, s["tp"]) for s in sections],
+                                       float(thickness), instrument)],
+        "provenance": [{"spec": k, **_provenance(m)} for k, m in mats.items()],
+        "figure": figure,
+    }
+
+
+def render_html(context: dict) -> str:
+    """The page for :func:`build`'s context (template ``templates/report.html.j2``)."""
+    import jinja2
+
+    env = jinja2.Environment(loader=jinja2.PackageLoader("dentalux.report", "templates"),
+                             autoescape=jinja2.select_autoescape(["html", "j2"]),
+                             undefined=jinja2.StrictUndefined, trim_blocks=True,
+                             lstrip_blocks=True)
+    return env.get_template("report.html.j2").render(**context)
+
+
+def check_out(out) -> Path:
+    """The report's path: an ``.html`` file in an existing, writable folder."""
+    text = os.fspath(out) if out is not None else ""
+    p = Path(text)
+    if not text or p.suffix.lower() not in (".html", ".htm"):
+        raise ValueError(f"--out = {text!r}: give a file name ending in .html")
+    if p.is_dir():
+        raise ValueError(f"--out = {text!r} is a folder: give a file name ending in .html")
+    parent = p.parent
+    if not parent.is_dir():
+        raise ValueError(f"--out = {text!r}: folder {str(parent)!r} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise ValueError(f"--out = {text!r}: folder {str(parent)!r} is not writable")
+    return p
+
+
+def write(out, materials, thickness: float, **kw) -> Path:
+    """Build the report and write it to ``out`` (an .html file, replaced if it exists),
+    atomically: a temporary file in the same folder, renamed when complete."""
+    p = check_out(out)
+    html = render_html(build(materials, thickness, **kw))
+    fd, tmp = tempfile.mkstemp(prefix=".dentalux-partial-", suffix=".html", dir=p.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(html)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, p)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return p
