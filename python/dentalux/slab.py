@@ -90,6 +90,8 @@ class SlabResult:
     radial_transmittance: list[float] = field(default_factory=list)
     angular_reflectance: list[float] = field(default_factory=list)
     angular_transmittance: list[float] = field(default_factory=list)
+    window: dict[str, float] = field(default_factory=dict)
+    window_stderr: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -126,13 +128,17 @@ def simulate(
     radial: tuple[int, float] | None = None,
     angular_bins: int | None = None,
     band: int = 0,
+    window: tuple | None = None,
     progress: bool | None = False,
 ) -> SlabResult:
     """Simulate a layered slab lit from above; see :class:`SlabResult`.
 
     ``radial=(bins, r_max_mm)`` adds R(r), T(r) per unit area [1/mm^2]; ``angular_bins``
-    adds exit-angle histograms over [0, 90) degrees. The same ``seed`` gives the same
-    numbers for any ``threads``.
+    adds exit-angle histograms over [0, 90) degrees. ``window=(illuminated_radius,
+    viewed_radius, specimen_radius, backing, cone)`` puts an instrument's lit spot, window
+    [mm], backing reflectance and detector cone ((low, high) degrees or None) into the run
+    (see :mod:`dentalux.instrument`); its tallies come back in ``window``. The same ``seed``
+    gives the same numbers for any ``threads``.
     """
     if isinstance(layers, Layer):
         layers = [layers]
@@ -164,6 +170,7 @@ def simulate(
             band=band,
             radial=radial,
             angular_bins=angular_bins,
+            window=window,
             progress=cb,
         )
     seconds = time.perf_counter() - start
@@ -179,4 +186,6 @@ def simulate(
         radial_transmittance=raw["radial_transmittance"],
         angular_reflectance=raw["angular_reflectance"],
         angular_transmittance=raw["angular_transmittance"],
+        window=raw.get("window", {}),
+        window_stderr=raw.get("window_stderr", {}),
     )

@@ -44,6 +44,7 @@ fn main() {
         band: 0,
         radial: None,
         angular_bins: None,
+        window: None,
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)

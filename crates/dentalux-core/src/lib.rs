@@ -19,6 +19,7 @@ pub mod error;
 pub mod film;
 pub mod fresnel;
 pub mod geometry;
+pub mod instrument;
 pub mod integrators;
 pub mod lights;
 pub mod math;

@@ -259,6 +259,7 @@ fn slab_under_sky(half: f64) -> (Scene, Vec3, f64, f64) {
         band: 0,
         radial: None,
         angular_bins: None,
+        window: None,
     };
     let res = slab::simulate(&cfg, &Control::new()).unwrap();
     let rt = res.get("total_reflectance").unwrap();

@@ -1,6 +1,7 @@
 //! Binding of the slab simulator and of the phase functions (for tests and plots).
 
 use crate::runner;
+use dentalux_core::instrument::{Window, WINDOW_KEYS};
 use dentalux_core::integrators::slab::{
     simulate, Estimator, Incidence, SlabConfig, SlabLayer, SCALAR_KEYS,
 };
@@ -27,12 +28,15 @@ pub fn phase_from(
 
 /// One layer as Python passes it: (mua, mus, g, fd, n, thickness, lobes).
 type LayerTuple = (f64, f64, f64, f64, f64, f64, Option<Vec<(f64, f64)>>);
+/// An instrument window as Python passes it: (illuminated radius, viewed radius, specimen
+/// radius [mm], backing reflectance, detector cone (low, high) [deg] or None).
+type WindowTuple = (f64, f64, f64, f64, Option<(f64, f64)>);
 
 /// Simulate a layered slab; returns a dict of the results (see `dentalux.slab`).
 #[pyfunction]
 #[pyo3(signature = (layers, n_photons, seed, n_above=1.0, n_below=1.0, incidence="normal",
     angle_deg=0.0, estimator="analog", threads=None, band=0, radial=None, angular_bins=None,
-    progress=None))]
+    window=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn slab_simulate<'py>(
     py: Python<'py>,
@@ -48,6 +52,7 @@ pub fn slab_simulate<'py>(
     band: u64,
     radial: Option<(usize, f64)>,
     angular_bins: Option<usize>,
+    window: Option<WindowTuple>,
     progress: Option<PyObject>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut stack = Vec::with_capacity(layers.len());
@@ -87,6 +92,13 @@ pub fn slab_simulate<'py>(
         band,
         radial,
         angular_bins,
+        window: window.map(|(a, b, rs, backing, cone)| Window {
+            illuminated_radius: a,
+            viewed_radius: b,
+            specimen_radius: rs,
+            backing,
+            cone: cone.map(|(lo, hi)| (lo.to_radians(), hi.to_radians())),
+        }),
     };
     cfg.validate().map_err(runner::to_py_err)?;
     let res = runner::run(py, threads, progress, |c| simulate(&cfg, c))?;
@@ -103,6 +115,16 @@ pub fn slab_simulate<'py>(
     out.set_item("radial_transmittance", res.radial_transmittance)?;
     out.set_item("angular_reflectance", res.angular_reflectance)?;
     out.set_item("angular_transmittance", res.angular_transmittance)?;
+    if cfg.window.is_some() {
+        let win = PyDict::new(py);
+        let win_err = PyDict::new(py);
+        for (i, k) in WINDOW_KEYS.iter().enumerate() {
+            win.set_item(*k, res.window[i])?;
+            win_err.set_item(*k, res.window_stderr[i])?;
+        }
+        out.set_item("window", win)?;
+        out.set_item("window_stderr", win_err)?;
+    }
     Ok(out)
 }
 

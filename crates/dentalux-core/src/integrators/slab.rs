@@ -31,6 +31,7 @@
 use crate::control::Control;
 use crate::error::{check_positive, check_range, Error, Result};
 use crate::fresnel::reflectance_and_cos_t;
+use crate::instrument::{self, Window};
 use crate::math::{rotate_direction_scaled, Vec3};
 use crate::medium::Medium;
 use crate::phase::PhaseFunction;
@@ -110,7 +111,14 @@ pub struct SlabConfig {
     pub radial: Option<(usize, f64)>,
     /// Number of exit-angle bins over [0, 90°]; `None` for no histogram.
     pub angular_bins: Option<usize>,
+    /// An instrument's finite lit spot, window and backing; `None` for the laterally
+    /// infinite slab in the media above and below.
+    pub window: Option<Window>,
 }
+
+/// Most bins of a radial or angular profile: each thread keeps its own copies, so the cap
+/// keeps a run's profile memory below ~0.5 GB (8 B × 2 profiles × bins × (threads + 1)).
+pub const MAX_PROFILE_BINS: usize = 1 << 22;
 
 /// Scalar results, in this order in [`SlabResult::values`] and [`SlabResult::stderr`].
 pub const SCALAR_KEYS: [&str; 7] = [
@@ -129,6 +137,9 @@ const UNSC_T: usize = 3;
 const DIFF_T: usize = 4;
 const TOT_T: usize = 5;
 const ABS: usize = 6;
+/// Per-photon scalars: [`SCALAR_KEYS`] then the window's [`instrument::WINDOW_KEYS`].
+const N_SCALARS: usize = 7;
+const N_TALLIES: usize = N_SCALARS + instrument::WINDOW_KEYS.len();
 
 /// What a slab run measured; all fractions of the incident power.
 #[derive(Debug, Clone, PartialEq)]
@@ -150,6 +161,10 @@ pub struct SlabResult {
     pub angular_reflectance: Vec<f64>,
     /// Fraction of power leaving the bottom per exit-angle bin (if asked).
     pub angular_transmittance: Vec<f64>,
+    /// Means of the window tallies [`instrument::WINDOW_KEYS`] (zeros without a window).
+    pub window: [f64; 6],
+    /// Their standard errors.
+    pub window_stderr: [f64; 6],
 }
 
 impl SlabResult {
@@ -199,14 +214,24 @@ impl SlabConfig {
                 "deg",
             )?;
         }
+        let max = MAX_PROFILE_BINS;
         if let Some((bins, rmax)) = self.radial {
-            if bins == 0 {
-                return Err(Error::InvalidInput("radial bins = 0: allowed ≥ 1".into()));
+            if bins == 0 || bins > max {
+                return Err(Error::InvalidInput(format!(
+                    "radial bins = {bins} is out of range: allowed [1, {max}]"
+                )));
             }
             check_positive("radial max", rmax, "mm")?;
         }
-        if self.angular_bins == Some(0) {
-            return Err(Error::InvalidInput("angular bins = 0: allowed ≥ 1".into()));
+        if let Some(bins) = self.angular_bins {
+            if bins == 0 || bins > max {
+                return Err(Error::InvalidInput(format!(
+                    "angular bins = {bins} is out of range: allowed [1, {max}]"
+                )));
+            }
+        }
+        if let Some(w) = &self.window {
+            w.validate()?;
         }
         Ok(())
     }
@@ -215,8 +240,8 @@ impl SlabConfig {
 /// Per-batch accumulators: per-photon sums and sums of squares of each scalar.
 #[derive(Clone)]
 struct Tally {
-    sum: [f64; 7],
-    sumsq: [f64; 7],
+    sum: [f64; N_TALLIES],
+    sumsq: [f64; N_TALLIES],
     absorbed: Vec<f64>,
     radial_r: Vec<f64>,
     radial_t: Vec<f64>,
@@ -229,8 +254,8 @@ impl Tally {
         let rb = cfg.radial.map_or(0, |r| r.0);
         let ab = cfg.angular_bins.unwrap_or(0);
         Self {
-            sum: [0.0; 7],
-            sumsq: [0.0; 7],
+            sum: [0.0; N_TALLIES],
+            sumsq: [0.0; N_TALLIES],
             absorbed: vec![0.0; cfg.layers.len()],
             radial_r: vec![0.0; rb],
             radial_t: vec![0.0; rb],
@@ -266,7 +291,7 @@ pub fn simulate(cfg: &SlabConfig, control: &Control) -> Result<SlabResult> {
             let count = batch.min(cfg.n_photons - b * batch);
             let mut rng = Stream::new(cfg.seed, cfg.band, b);
             let mut tally = Tally::new(cfg);
-            let mut photon = [0.0; 7];
+            let mut photon = [0.0; N_TALLIES];
             for _ in 0..count {
                 photon.fill(0.0);
                 tracer.trace(&mut rng, &mut photon, &mut tally, control)?;
@@ -339,11 +364,22 @@ impl HgSampler {
     }
 }
 
+/// One photon's contributions to every per-photon tally.
+type Photon = [f64; N_TALLIES];
+/// Most Lambertian bounces of one visit to the backing before the photon is given up to it.
+const MAX_BACKING_BOUNCES: usize = 10_000;
+
 /// Precomputed geometry of the stack plus the photon walk.
 struct Tracer<'a> {
     cfg: &'a SlabConfig,
     /// Constants of each layer, top to bottom.
     layers: Vec<LayerConst>,
+    /// Squared specimen radius [mm²] (∞ without a window or rim).
+    rim2: f64,
+    /// Backing reflectance (0 without a window).
+    backing: f64,
+    /// 1 / the Lambertian fraction of the detector cone.
+    inv_cone_fraction: f64,
 }
 
 impl<'a> Tracer<'a> {
@@ -372,7 +408,14 @@ impl<'a> Tracer<'a> {
                 c
             })
             .collect();
-        Self { cfg, layers }
+        let win = cfg.window;
+        Self {
+            cfg,
+            layers,
+            rim2: win.map_or(f64::INFINITY, |w| w.specimen_radius * w.specimen_radius),
+            backing: win.map_or(0.0, |w| w.backing),
+            inv_cone_fraction: win.map_or(1.0, |w| 1.0 / w.cone_fraction()),
+        }
     }
 
     fn eta_of(&self, layer: isize) -> f64 {
@@ -386,7 +429,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// Record power `w` leaving the slab at `pos` along `d` (top if d.z < 0).
-    fn exit(&self, pos: Vec3, d: Vec3, w: f64, scattered: bool, ph: &mut [f64; 7], t: &mut Tally) {
+    fn exit(&self, pos: Vec3, d: Vec3, w: f64, scattered: bool, ph: &mut Photon, t: &mut Tally) {
         let top = d.z < 0.0;
         if top {
             ph[DIFF_R] += w;
@@ -394,6 +437,9 @@ impl<'a> Tracer<'a> {
         } else {
             ph[if scattered { DIFF_T } else { UNSC_T }] += w;
             ph[TOT_T] += w;
+        }
+        if let Some(win) = &self.cfg.window {
+            self.exit_window(win, pos, d.z, w, top, ph);
         }
         if let Some((bins, rmax)) = self.cfg.radial {
             let r = (pos.x * pos.x + pos.y * pos.y).sqrt();
@@ -415,11 +461,56 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    /// Tally power `w` leaving at `pos` (|cos θ| = `cos_exit` in the medium outside)
+    /// against the window: inside or outside it on the top, inside it on the bottom.
+    fn exit_window(
+        &self,
+        win: &Window,
+        pos: Vec3,
+        cos_exit: f64,
+        w: f64,
+        top: bool,
+        ph: &mut Photon,
+    ) {
+        let r2 = pos.x * pos.x + pos.y * pos.y;
+        let inside = r2 <= win.viewed_radius * win.viewed_radius;
+        if !top {
+            if inside {
+                ph[N_SCALARS + instrument::VIEWED_T] += w;
+            }
+        } else if inside {
+            ph[N_SCALARS + instrument::VIEWED_R] += w;
+            if win.in_cone(cos_exit) {
+                ph[N_SCALARS + instrument::VIEWED_CONE] += w * self.inv_cone_fraction;
+            }
+        } else {
+            ph[N_SCALARS + instrument::OUTSIDE_R] += w;
+        }
+    }
+
+    /// The first-surface specular reflection of power `w` at the entry point `pos`.
+    fn specular(&self, pos: Vec3, cos_in: f64, w: f64, ph: &mut Photon) {
+        ph[SPEC] += w;
+        ph[TOT_R] += w;
+        if let Some(win) = &self.cfg.window {
+            self.exit_window(win, pos, cos_in, w, true, ph);
+            if pos.x * pos.x + pos.y * pos.y <= win.viewed_radius * win.viewed_radius {
+                ph[N_SCALARS + instrument::VIEWED_SPEC] += w;
+            }
+        }
+    }
+
+    /// Whether a photon at `pos` has left the specimen through its rim.
+    #[inline]
+    fn beyond_rim(&self, pos: Vec3) -> bool {
+        pos.x * pos.x + pos.y * pos.y > self.rim2
+    }
+
     /// Trace one photon; its contributions go to `ph` (scalars) and `t` (profiles).
     fn trace(
         &self,
         rng: &mut Stream,
-        ph: &mut [f64; 7],
+        ph: &mut Photon,
         t: &mut Tally,
         control: &Control,
     ) -> Result<()> {
@@ -432,24 +523,30 @@ impl<'a> Tracer<'a> {
             Incidence::Angle(theta) => Vec3::new(theta.sin(), 0.0, theta.cos()),
             Incidence::Diffuse => cosine_hemisphere(rng.uniform2()),
         };
+        // entry point: uniform over the lit disc of a window, else the origin
+        let mut pos = Vec3::ZERO;
+        if let Some(win) = &cfg.window {
+            if win.illuminated_radius > 0.0 {
+                let (c, s, rho) = sample_azimuth_scaled_bits(|| rng.next_bits());
+                let r = win.illuminated_radius * rng.uniform().sqrt() / rho;
+                pos = Vec3::new(r * c, r * s, 0.0);
+            }
+        }
         let eta0 = self.layers[0].eta;
         let (r0, cos_t0) = reflectance_and_cos_t(d_above.z, cfg.n_above, eta0);
         let mut w = 1.0;
         if weighted {
-            ph[SPEC] += r0;
-            ph[TOT_R] += r0;
+            self.specular(pos, d_above.z, r0, ph);
             w = 1.0 - r0;
             if w <= 0.0 {
                 return Ok(());
             }
         } else if rng.uniform() < r0 {
-            ph[SPEC] += 1.0;
-            ph[TOT_R] += 1.0;
+            self.specular(pos, d_above.z, 1.0, ph);
             return Ok(());
         }
         let k = cfg.n_above / eta0;
         let mut d = Vec3::new(d_above.x * k, d_above.y * k, cos_t0);
-        let mut pos = Vec3::ZERO;
         let mut layer: isize = 0;
         let mut scattered = false;
         // `roulette` is set once the weighted photon's weight fell below the threshold
@@ -481,6 +578,10 @@ impl<'a> Tracer<'a> {
             if s < db {
                 // interaction inside layer li (eqs. 2–4)
                 pos += d * s;
+                if self.beyond_rim(pos) {
+                    ph[N_SCALARS + instrument::RIM] += w;
+                    return Ok(());
+                }
                 if roulette {
                     if rng.uniform() >= lc.albedo {
                         t.absorbed[li] += w;
@@ -515,6 +616,10 @@ impl<'a> Tracer<'a> {
             let down = d.z > 0.0;
             pos += d * db;
             pos.z = if down { lc.z_bot } else { lc.z_top };
+            if self.beyond_rim(pos) {
+                ph[N_SCALARS + instrument::RIM] += w;
+                return Ok(());
+            }
             let next = if down { layer + 1 } else { layer - 1 };
             let eta_i = lc.eta;
             let eta_t = self.eta_of(next);
@@ -528,6 +633,18 @@ impl<'a> Tracer<'a> {
                 continue;
             }
             d = d_t;
+            if outside && down && self.backing > 0.0 {
+                // the backing under the stack (zero gap, in the medium below)
+                let hit =
+                    self.backing_bounce(rng, pos, &mut d, &mut w, &mut roulette, scattered, ph, t);
+                match hit {
+                    Some(()) => {
+                        scattered = true;
+                        continue;
+                    }
+                    None => return Ok(()),
+                }
+            }
             if outside {
                 self.exit(pos, d, w, scattered, ph, t);
                 return Ok(());
@@ -536,11 +653,58 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    /// Light reaching the Lambertian backing at `pos`: the backing absorbs 1 − Rb (tallied
+    /// as transmitted) and sends the rest back up with a cosine-weighted direction, which
+    /// re-enters the bottom layer by the Fresnel roulette (or falls back onto the backing).
+    /// Returns `Some` with `d` pointing up inside the bottom layer, or `None` once absorbed.
+    #[allow(clippy::too_many_arguments)]
+    fn backing_bounce(
+        &self,
+        rng: &mut Stream,
+        pos: Vec3,
+        d: &mut Vec3,
+        w: &mut f64,
+        roulette: &mut bool,
+        mut scattered: bool,
+        ph: &mut Photon,
+        t: &mut Tally,
+    ) -> Option<()> {
+        let rb = self.backing;
+        let n_below = self.cfg.n_below;
+        let eta = self.layers[self.layers.len() - 1].eta;
+        for _ in 0..MAX_BACKING_BOUNCES {
+            if *roulette {
+                if rng.uniform() >= rb {
+                    self.exit(pos, *d, *w, scattered, ph, t);
+                    return None;
+                }
+            } else {
+                self.exit(pos, *d, *w * (1.0 - rb), scattered, ph, t);
+                *w *= rb;
+                if *w < WEIGHT_THRESHOLD {
+                    *roulette = true;
+                }
+            }
+            scattered = true;
+            let up = cosine_hemisphere(rng.uniform2());
+            let (r, cos_t) = reflectance_and_cos_t(up.z, n_below, eta);
+            if r >= 1.0 || (r > 0.0 && rng.uniform() < r) {
+                continue;
+            }
+            let k = n_below / eta;
+            *d = Vec3::new(up.x * k, up.y * k, -cos_t);
+            return Some(());
+        }
+        // a photon that keeps falling back (a near-white backing under total reflection)
+        self.exit(pos, *d, *w, true, ph, t);
+        None
+    }
+
     fn finish(&self, t: &Tally) -> SlabResult {
         let n = self.cfg.n_photons as f64;
-        let mut values = [0.0; 7];
-        let mut stderr = [0.0; 7];
-        for k in 0..7 {
+        let mut values = [0.0; N_TALLIES];
+        let mut stderr = [0.0; N_TALLIES];
+        for k in 0..N_TALLIES {
             let mean = t.sum[k] / n;
             values[k] = mean;
             stderr[k] = if n > 1.0 {
@@ -559,9 +723,20 @@ impl<'a> Tracer<'a> {
                 .map(|(i, x)| x / n / (PI * dr * dr * ((i + 1) * (i + 1) - i * i) as f64))
                 .collect()
         };
+        let split = |v: [f64; N_TALLIES]| -> ([f64; 7], [f64; 6]) {
+            let mut a = [0.0; 7];
+            let mut b = [0.0; 6];
+            a.copy_from_slice(&v[..N_SCALARS]);
+            b.copy_from_slice(&v[N_SCALARS..]);
+            (a, b)
+        };
+        let (values, window) = split(values);
+        let (stderr, window_stderr) = split(stderr);
         SlabResult {
             values,
             stderr,
+            window,
+            window_stderr,
             absorbed_per_layer: t.absorbed.iter().map(|a| a / n).collect(),
             photons: self.cfg.n_photons,
             radial_reflectance: per_area(&t.radial_r),
@@ -599,6 +774,7 @@ mod tests {
             band: 0,
             radial: None,
             angular_bins: None,
+            window: None,
         }
     }
 
@@ -714,6 +890,151 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("n_below"));
+    }
+
+    fn windowed(a: f64, b: f64, backing: f64, photons: u64) -> SlabConfig {
+        let mut cfg = one_layer(0.05, 6.0, 0.9, 1.63, 1.0, photons);
+        cfg.estimator = Estimator::Weighted;
+        cfg.window = Some(Window {
+            illuminated_radius: a,
+            viewed_radius: b,
+            specimen_radius: f64::INFINITY,
+            backing,
+            cone: None,
+        });
+        cfg
+    }
+
+    fn w(r: &SlabResult, k: usize) -> (f64, f64) {
+        (r.window[k], r.window_stderr[k])
+    }
+
+    /// Viewed + outside the window + rim + into the backing + absorbed = 1 per photon.
+    #[test]
+    fn window_ledger_closes_for_both_estimators() {
+        for est in [Estimator::Analog, Estimator::Weighted] {
+            for (backing, rim) in [(0.0, f64::INFINITY), (0.9, f64::INFINITY), (0.5, 2.0)] {
+                let mut cfg = windowed(1.5, 1.0, backing, 20_000);
+                cfg.estimator = est;
+                cfg.window.as_mut().unwrap().specimen_radius = rim;
+                let r = run(&cfg);
+                let sum = r.window[instrument::VIEWED_R]
+                    + r.window[instrument::OUTSIDE_R]
+                    + r.window[instrument::RIM]
+                    + r.values[TOT_T]
+                    + r.values[ABS];
+                assert!((sum - 1.0).abs() < 1e-9, "{est:?} {backing} {rim}: {sum}");
+                let top = r.window[instrument::VIEWED_R] + r.window[instrument::OUTSIDE_R];
+                assert!((top - r.values[TOT_R]).abs() < 1e-9);
+                assert_eq!(r.window[instrument::RIM] > 0.0, rim.is_finite());
+            }
+        }
+    }
+
+    /// A backing inside the walk against the adding formula over runs without it,
+    /// R = R1 + T1 Rb T2 / (1 − Rb R2) (exact for an infinite slab on a Lambertian backing).
+    #[test]
+    fn backing_inside_the_walk_matches_the_adding_formula() {
+        let rb = 0.8;
+        let big = windowed(1e6, f64::INFINITY, rb, 200_000);
+        let inside = run(&big);
+        let mut top = one_layer(0.05, 6.0, 0.9, 1.63, 1.0, 200_000);
+        top.estimator = Estimator::Weighted;
+        let a = run(&top);
+        let mut below = top.clone();
+        below.incidence = Incidence::Diffuse;
+        below.band = 1;
+        let b = run(&below);
+        let (r1, t1, r2, t2) = (
+            a.values[TOT_R],
+            a.values[TOT_T],
+            b.values[TOT_R],
+            b.values[TOT_T],
+        );
+        let adding = r1 + t1 * rb * t2 / (1.0 - rb * r2);
+        let k = 1.0 / (1.0 - rb * r2);
+        let se = ((a.stderr[TOT_R]).powi(2)
+            + (t2 * rb * k * a.stderr[TOT_T]).powi(2)
+            + (t1 * rb * k * b.stderr[TOT_T]).powi(2)
+            + (t1 * rb * t2 * rb * k * k * b.stderr[TOT_R]).powi(2))
+        .sqrt();
+        let (v, v_se) = w(&inside, instrument::VIEWED_R);
+        let tol = 4.0 * (se * se + v_se * v_se).sqrt();
+        assert!(
+            (v - adding).abs() < tol,
+            "inside {v} adding {adding} ± {tol}"
+        );
+        // and the backing matters by far more than the tolerance
+        assert!(v - r1 > 20.0 * tol, "{v} vs {r1}");
+    }
+
+    /// Reciprocity: swapping the lit and the viewed radii leaves the reading
+    /// (viewed power / an ideal white's) unchanged.
+    #[test]
+    fn swapping_lit_and_viewed_radii_gives_the_same_reading() {
+        let reading = |a: f64, b: f64, band: u64| {
+            let mut cfg = windowed(a, b, 0.5, 400_000);
+            cfg.band = band;
+            let r = run(&cfg);
+            let f = cfg.window.unwrap().white_fraction();
+            let (v, se) = w(&r, instrument::VIEWED_R);
+            (v / f, se / f)
+        };
+        let (x, sx) = reading(3.0, 1.0, 0);
+        let (y, sy) = reading(1.0, 3.0, 1);
+        assert!(
+            (x - y).abs() < 4.0 * (sx * sx + sy * sy).sqrt(),
+            "{x} ± {sx} vs {y} ± {sy}"
+        );
+        // edge loss is real here: the reading is well below the infinite slab's
+        let (inf, _) = reading(1e6, f64::INFINITY, 2);
+        assert!(inf - x > 10.0 * sx, "{inf} vs {x}");
+    }
+
+    /// A cone over the whole hemisphere reads as the plain window; a ring reads a
+    /// Lambertian-normalised radiance factor, near the hemispherical one for a diffuse slab.
+    #[test]
+    fn detector_cone_normalises_by_its_lambertian_fraction() {
+        let mut cfg = windowed(1.0, 1.0, 0.0, 100_000);
+        cfg.window.as_mut().unwrap().cone = Some((0.0, 0.5 * PI));
+        let r = run(&cfg);
+        assert!((r.window[instrument::VIEWED_CONE] - r.window[instrument::VIEWED_R]).abs() < 1e-12);
+        // a thick white diffuser: exitance close to Lambertian
+        let mut cfg = one_layer(0.0, 50.0, 0.0, 1.0, 20.0, 100_000);
+        cfg.window = Some(Window {
+            illuminated_radius: 1e6,
+            viewed_radius: f64::INFINITY,
+            specimen_radius: f64::INFINITY,
+            backing: 0.0,
+            cone: Some((40f64.to_radians(), 50f64.to_radians())),
+        });
+        let r = run(&cfg);
+        let (cone, se) = w(&r, instrument::VIEWED_CONE);
+        let hemi = r.window[instrument::VIEWED_R];
+        assert!(hemi > 0.9, "{hemi}");
+        // a semi-infinite isotropic scatterer is not exactly Lambertian: within 5 %
+        assert!(
+            (cone / hemi - 1.0).abs() < 0.05 + 4.0 * se,
+            "{cone} vs {hemi}"
+        );
+    }
+
+    #[test]
+    fn window_off_leaves_the_numbers_unchanged() {
+        let cfg = one_layer(0.5, 20.0, 0.9, 1.5, 1.0, 10_000);
+        let plain = run(&cfg);
+        assert_eq!(plain.window, [0.0; 6]);
+        let mut with = cfg.clone();
+        with.window = Some(Window {
+            illuminated_radius: 0.0,
+            viewed_radius: f64::INFINITY,
+            specimen_radius: f64::INFINITY,
+            backing: 0.0,
+            cone: None,
+        });
+        let r = run(&with);
+        assert_eq!(r.values, plain.values);
+        assert!((r.window[instrument::VIEWED_R] - plain.values[TOT_R]).abs() < 1e-12);
     }
 
     #[test]

@@ -1,0 +1,348 @@
+"""The instrument that reads a specimen: lit spot, viewed window, geometry, backings, contact.
+
+A dental number is always "as read by" an instrument. An :class:`Instrument` names the
+diameter of the lit spot and of the viewed window at the specimen, the measuring geometry,
+the black and white backings, an air gap or an optical-contact fluid between specimen and
+backing, and optionally the specimen's own diameter. The slab simulator in the core runs
+with that geometry inside the walk (:mod:`dentalux_core::instrument`): photons enter
+uniformly over the lit disc, the backing lies under the specimen, and light is read only
+where it leaves inside the window. Light that leaves elsewhere is the edge loss.
+
+Geometries, each simulated in its reciprocal form (same reading for a reciprocal specimen,
+far fewer photons for a narrow detector):
+
+- ``d8-sci`` / ``d8-sce``: diffuse illumination, viewing 8 deg off the normal, specular
+  component included or excluded; simulated as an 8 deg beam collected over the hemisphere
+  (SCE drops the first-surface specular reflection inside the window).
+- ``45-0`` and ``0-45``: an annular 45 deg ring and a normal view; simulated as a normal
+  beam collected over the ring 45 +- 8 deg (the CIE 15 tolerance of every ray within 8 deg
+  of its beam axis, instruments.toml), normalised by the ring's Lambertian fraction.
+- ``noncontact``: a small view inside wide light (a telespectroradiometer in a booth),
+  read like ``45-0``; the view must not exceed the lit spot.
+- ``0-d``: a normal beam, the whole hemisphere collected, specular included: the geometry
+  of the ``infinite`` instrument, which is dentalux's laterally infinite disc on ideal
+  backings (the adding formula of :mod:`dentalux.dental`), read exactly as before.
+
+Presets live in ``data/instruments.toml`` with a provenance entry for every number; a
+user's own instrument is a TOML file with the same keys (docs/instruments.md).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+DATA = Path(__file__).parent / "data" / "instruments.toml"
+INFINITE = "infinite"
+# `dentalux shade` reads through this preset unless told otherwise (Yu et al. 2009's window)
+DEFAULT = "contact-probe-3mm"
+# half-width of the 45 deg ring [deg]: CIE 15 keeps every ray within 8 deg of its beam axis
+RING_HALF_WIDTH = 8.0
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """How a geometry is simulated: the beam's incidence, the detector cone (None: the
+    hemisphere), whether the first-surface specular reflection counts, and whether the view
+    may be larger than the lit spot."""
+
+    incidence: str
+    cone_deg: tuple[float, float] | None
+    specular: str
+    view_may_exceed_light: bool
+
+
+_RING = (45.0 - RING_HALF_WIDTH, 45.0 + RING_HALF_WIDTH)
+GEOMETRIES = {
+    "d8-sci": Geometry("angle:8", None, "included", False),
+    "d8-sce": Geometry("angle:8", None, "excluded", False),
+    "45-0": Geometry("normal", _RING, "excluded", True),
+    "0-45": Geometry("normal", _RING, "excluded", True),
+    "noncontact": Geometry("normal", _RING, "excluded", False),
+    "0-d": Geometry("normal", None, "included", True),
+}
+KEYS = ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm", "backing_black",
+        "backing_white", "contact_index", "specimen_diameter_mm")
+
+
+def _number(name: str, value, lo: float, lo_open: bool, hi: float = math.inf,
+            allow_inf: bool = False) -> float:
+    """``value`` as a float inside [lo, hi] (lo open where asked), or a ValueError naming it."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} = {value!r}: must be a number") from None
+    if isinstance(value, bool) or math.isnan(x) or (math.isinf(x) and not allow_inf):
+        raise ValueError(f"{name} = {value!r}: must be a finite number")
+    if (x <= lo if lo_open else x < lo) or x > hi:
+        left = "(" if lo_open else "["
+        right = "inf)" if math.isinf(hi) else f"{hi:g}]"
+        raise ValueError(f"{name} = {value!r} is out of range: allowed {left}{lo:g}, {right}")
+    return x
+
+
+def _backing(name: str, value):
+    """A backing reflectance: a number in [0, 1] or {wavelength_nm = [...], reflectance = [...]}."""
+    if isinstance(value, dict):
+        try:
+            wl = [float(x) for x in value["wavelength_nm"]]
+            r = [float(x) for x in value["reflectance"]]
+        except (KeyError, TypeError, ValueError):
+            raise ValueError(f"{name}: a spectrum needs wavelength_nm = [...] and "
+                             "reflectance = [...] of numbers") from None
+        if len(wl) != len(r) or len(wl) < 1:
+            raise ValueError(f"{name}: wavelength_nm and reflectance must have the same length")
+        if any(not (0.0 <= x <= 1.0) for x in r):
+            raise ValueError(f"{name}: reflectance must lie in [0, 1]")
+        return (tuple(wl), tuple(r))
+    return _number(name, value, 0.0, False, 1.0)
+
+
+@dataclass(frozen=True)
+class Instrument:
+    """One instrument's measuring geometry (diameters in mm at the specimen)."""
+
+    name: str
+    geometry: str = "0-45"
+    illuminated_diameter_mm: float = 3.0
+    viewed_diameter_mm: float = 3.0
+    backing_black: float | tuple = 0.0
+    backing_white: float | tuple = 0.9
+    contact_index: float | None = None
+    specimen_diameter_mm: float | None = None
+    description: str = ""
+    provenance: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        if self.geometry not in GEOMETRIES:
+            raise ValueError(f"geometry = {self.geometry!r}: allowed {', '.join(GEOMETRIES)}")
+        infinite = self.is_infinite
+        ill = _number("illuminated_diameter_mm", self.illuminated_diameter_mm, 0.0, True,
+                      allow_inf=infinite)
+        view = _number("viewed_diameter_mm", self.viewed_diameter_mm, 0.0, True,
+                       allow_inf=infinite)
+        if view > ill and not GEOMETRIES[self.geometry].view_may_exceed_light:
+            raise ValueError(
+                f"viewed_diameter_mm = {view:g} is larger than illuminated_diameter_mm = "
+                f"{ill:g}: geometry {self.geometry} views inside the lit area (allowed "
+                f"viewed_diameter_mm <= {ill:g})")
+        _backing("backing_black", self.backing_black)
+        _backing("backing_white", self.backing_white)
+        if self.contact_index is not None:
+            _number("contact_index", self.contact_index, 1.0, False)
+        if self.specimen_diameter_mm is not None:
+            spec = _number("specimen_diameter_mm", self.specimen_diameter_mm, 0.0, True)
+            if view > spec:
+                raise ValueError(
+                    f"viewed_diameter_mm = {view:g} is larger than specimen_diameter_mm = "
+                    f"{spec:g}: the window would look past the specimen (allowed "
+                    f"viewed_diameter_mm <= {spec:g})")
+
+    @property
+    def is_infinite(self) -> bool:
+        """The laterally infinite disc read over infinite areas (the adding formula)."""
+        return self.name == INFINITE
+
+    @property
+    def spec(self) -> Geometry:
+        return GEOMETRIES[self.geometry]
+
+    @property
+    def lit_diameter_mm(self) -> float:
+        """The lit part of the specimen: light falling beyond its rim never enters it, and
+        the reading's normalisation (an ideal white lit alike) is the same per unit area."""
+        if self.specimen_diameter_mm is None:
+            return self.illuminated_diameter_mm
+        return min(self.illuminated_diameter_mm, self.specimen_diameter_mm)
+
+    def window(self, backing: float, brute_force: bool = False) -> tuple:
+        """The core's window tuple for one run with a backing of reflectance ``backing``.
+
+        The normalised reading is symmetric in the two diameters (reciprocity, and the
+        rotational symmetry of a normal beam read over a ring or a hemisphere), so the run
+        lights the smaller disc and reads the larger: every photon then counts towards the
+        reading, instead of (b/a)^2 of them for a small view in wide light. ``brute_force``
+        lights the lit disc and reads the window as the instrument does (for checks).
+        """
+        spec = math.inf if self.specimen_diameter_mm is None else self.specimen_diameter_mm / 2
+        a, b = self.lit_diameter_mm / 2, self.viewed_diameter_mm / 2
+        if not brute_force:
+            a, b = min(a, b), max(a, b)
+        return (a, b, spec, float(backing), self.spec.cone_deg)
+
+    def white_fraction(self, brute_force: bool = False) -> float:
+        """Power an ideal Lambertian white sends through the run's window: min(a, b)^2 / a^2
+        (1 when the run lights the smaller disc)."""
+        a, b = self.lit_diameter_mm, self.viewed_diameter_mm
+        return 1.0 if a <= b or not brute_force else (b / a) ** 2
+
+    def reading(self, window: dict, stderr: dict, brute_force: bool = False
+                ) -> tuple[float, float]:
+        """Reflectance factor (and its standard error) from one run's window tallies."""
+        key = "viewed_cone_reflectance" if self.spec.cone_deg else "viewed_reflectance"
+        value, var = window[key], stderr[key] ** 2
+        if self.spec.cone_deg is None and self.spec.specular == "excluded":
+            value -= window["viewed_specular"]
+            var += stderr["viewed_specular"] ** 2  # conservative: the two are correlated
+        f = self.white_fraction(brute_force)
+        return value / f, math.sqrt(var) / f
+
+    def to_json(self) -> dict:
+        """The ``instrument`` object of ``dentalux shade --json``."""
+        def backing(v):
+            return {"wavelength_nm": list(v[0]), "reflectance": list(v[1])} if isinstance(
+                v, tuple) else v
+
+        def finite(x):
+            return None if x is None or math.isinf(x) else x
+
+        return {
+            "name": self.name,
+            "geometry": self.geometry,
+            "illuminated_diameter_mm": finite(self.illuminated_diameter_mm),
+            "viewed_diameter_mm": finite(self.viewed_diameter_mm),
+            "specular": self.spec.specular,
+            "contact_index": self.contact_index,
+            "backing_black": backing(self.backing_black),
+            "backing_white": backing(self.backing_white),
+            "specimen_diameter_mm": self.specimen_diameter_mm,
+        }
+
+    def override(self, **changes) -> Instrument:
+        """A copy with the given fields changed (None leaves a field as it is); the name
+        gains a ``+custom`` mark so a reading never claims to be the plain preset."""
+        changes = {k: v for k, v in changes.items() if v is not None}
+        if not changes:
+            return self
+        bad = sorted(set(changes) - set(KEYS))
+        if bad:
+            raise ValueError(f"unknown instrument field {bad[0]!r}: allowed {', '.join(KEYS)}")
+        if self.is_infinite and set(changes) - {"backing_black", "backing_white",
+                                                 "contact_index"}:
+            base = replace(self, name="custom", geometry="0-d", illuminated_diameter_mm=25.4,
+                           viewed_diameter_mm=25.4)
+            return replace(base, **changes)
+        name = self.name if self.name.endswith("+custom") else f"{self.name}+custom"
+        if self.is_infinite:
+            name = INFINITE  # the backings and contact are today's infinite-geometry options
+        return replace(self, name=name, **changes)
+
+
+def overlap_area(rho, a: float, b: float):
+    """Area [mm²] shared by two discs of radii ``a`` and ``b`` [mm] whose centres are
+    ``rho`` [mm] apart (array-valued in ``rho``)."""
+    import numpy as np
+
+    rho = np.asarray(rho, dtype=float)
+    small, big = min(a, b), max(a, b)
+    out = np.where(rho <= big - small, np.pi * small**2, 0.0)
+    lens = (rho > big - small) & (rho < a + b)
+    r = np.where(lens, rho, 1.0)
+    ca = np.clip((r**2 + a**2 - b**2) / (2 * r * a), -1, 1)
+    cb = np.clip((r**2 + b**2 - a**2) / (2 * r * b), -1, 1)
+    k = (-r + a + b) * (r + a - b) * (r - a + b) * (r + a + b)
+    area = a**2 * np.arccos(ca) + b**2 * np.arccos(cb) - 0.5 * np.sqrt(np.clip(k, 0, None))
+    return np.where(lens, area, out)
+
+
+def reading_from_profile(radial_reflectance, r_max: float, a: float, b: float) -> float:
+    """The reading of a lit disc of radius ``a`` and a window of radius ``b`` [mm] from a
+    pencil beam's exit profile R(r) [1/mm²] (bins over [0, r_max]): by superposition the
+    power from the lit disc that leaves inside the window is ∫ R(ρ) A(ρ) 2πρ dρ / (π a²),
+    A the discs' overlap, and an ideal white reads π min(a, b)² / (π a²) of it."""
+    import numpy as np
+
+    prof = np.asarray(radial_reflectance, dtype=float)
+    edges = np.linspace(0.0, r_max, prof.size + 1)
+    # each bin's ring area times the overlap at its (area-weighted) mean radius
+    ring = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
+    mid = (2.0 / 3.0) * (edges[1:] ** 3 - edges[:-1] ** 3) / (edges[1:] ** 2 - edges[:-1] ** 2)
+    return float(np.sum(prof * ring * overlap_area(mid, a, b)) / (np.pi * min(a, b) ** 2))
+
+
+def _infinite() -> Instrument:
+    return Instrument(
+        name=INFINITE, geometry="0-d", illuminated_diameter_mm=math.inf,
+        viewed_diameter_mm=math.inf, backing_black=0.0, backing_white=0.9,
+        description="Laterally infinite disc lit and viewed over infinite areas, on ideal "
+                    "Lambertian backings (no edge loss): the adding formula.",
+        provenance={"geometry": "assumed: the idealisation of dentalux.dental's adding formula"})
+
+
+def _from_table(name: str, table: dict, where: str) -> Instrument:
+    if not isinstance(table, dict):
+        raise ValueError(f"{where}: instrument {name!r} must be a table of keys")
+    known = set(KEYS) | {"description", "provenance"}
+    unknown = sorted(set(table) - known)
+    if unknown:
+        raise ValueError(f"{where}: instrument {name!r} has unknown key {unknown[0]!r}: "
+                         f"allowed {', '.join(sorted(known))}")
+    for key in ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm"):
+        if key not in table:
+            raise ValueError(f"{where}: instrument {name!r} needs {key!r}")
+    contact = table.get("contact_index", 1.0)
+    contact = _number(f"{name}.contact_index", contact, 1.0, False)
+    return Instrument(
+        name=name,
+        geometry=table["geometry"],
+        illuminated_diameter_mm=table["illuminated_diameter_mm"],
+        viewed_diameter_mm=table["viewed_diameter_mm"],
+        backing_black=_backing(f"{name}.backing_black", table.get("backing_black", 0.0)),
+        backing_white=_backing(f"{name}.backing_white", table.get("backing_white", 0.9)),
+        contact_index=None if contact == 1.0 else contact,
+        specimen_diameter_mm=table.get("specimen_diameter_mm"),
+        description=str(table.get("description", "")),
+        provenance=dict(table.get("provenance", {})),
+    )
+
+
+def _load(path: Path) -> dict[str, Instrument]:
+    try:
+        with open(path, "rb") as fh:
+            doc = tomllib.load(fh)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"instrument file {path.name}: not valid TOML ({exc})") from None
+    tables = doc.get("instruments")
+    if not isinstance(tables, dict) or not tables:
+        raise ValueError(f"instrument file {path.name}: needs [instruments.NAME] tables")
+    return {name: _from_table(name, t, path.name) for name, t in tables.items()}
+
+
+def presets() -> dict[str, Instrument]:
+    """Every named instrument: ``infinite`` and the presets of data/instruments.toml."""
+    return {INFINITE: _infinite(), **_load(DATA)}
+
+
+def get(instrument) -> Instrument:
+    """An Instrument, a preset name, or a TOML file with one ``[instruments.NAME]`` table."""
+    if isinstance(instrument, Instrument):
+        return instrument
+    if instrument is None:
+        return _infinite()
+    if not isinstance(instrument, (str, Path)):
+        raise ValueError(f"instrument = {instrument!r}: expected a name or a TOML file")
+    text = str(instrument)
+    if text.endswith(".toml"):
+        path = Path(text)
+        if not path.is_file():
+            raise ValueError(f"instrument file {path.name!r} not found")
+        found = _load(path)
+        if len(found) != 1:
+            raise ValueError(f"instrument file {path.name} holds {len(found)} instruments "
+                             f"({', '.join(found)}): give one")
+        return next(iter(found.values()))
+    known = presets()
+    if text not in known:
+        import difflib
+
+        near = difflib.get_close_matches(text, known, n=1)
+        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        raise ValueError(f"instrument = {text!r} is unknown{hint}: allowed "
+                         f"{', '.join(known)} or a TOML file")
+    return known[text]

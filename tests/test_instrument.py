@@ -1,0 +1,147 @@
+"""The instrument model: finite lit spot and window, backings inside the walk, edge loss.
+
+Checked against independent estimates: the adding formula of the infinite geometry (large
+areas), reciprocity (the two diameters swapped), a brute-force launch over the lit disc
+against both the run that lights the smaller disc and the pencil-beam profile convolved
+with the discs' overlap, and Yu et al.'s finding that TP rises with the window.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from dentalux import dental, instrument
+from dentalux.cli import main
+from dentalux.slab import Layer, simulate
+
+
+class Flat:
+    """A wavelength-independent material."""
+
+    def __init__(self, mua, mus, g=0.9, n=1.55, name="flat"):
+        self.mua, self.mus, self.g, self.n, self.fd, self.name = mua, mus, g, n, 0.0, name
+
+    def at(self, lam):
+        return self
+
+
+SCATTERING = Flat(0.03, 5.0)  # mus' 0.5 /mm: edge loss separates the two backings
+BANDS = [450, 550, 650]
+
+
+def close(a, b, sa, sb, k=4.0):
+    return abs(a - b) <= k * math.hypot(sa, sb)
+
+
+def test_large_areas_reproduce_the_infinite_geometry():
+    big = instrument.Instrument(name="big", geometry="0-d", illuminated_diameter_mm=4000.0,
+                                viewed_diameter_mm=4000.0, backing_black=0.0,
+                                backing_white=0.9)
+    inf = dental.metrics(SCATTERING, 1.0, bands=BANDS, photons=40_000)
+    fin = dental.metrics(SCATTERING, 1.0, bands=BANDS, photons=40_000, instrument=big)
+    for key in ("tp", "cr"):
+        assert close(fin.__dict__[key], inf.__dict__[key], fin.stderr[key], inf.stderr[key]), key
+    for j, c in enumerate("Lab"):
+        for side in ("lab_black", "lab_white"):
+            a, b = getattr(fin, side)[j], getattr(inf, side)[j]
+            assert close(a, b, fin.stderr[f"{side}.{c}"], inf.stderr[f"{side}.{c}"]), (side, c)
+    assert fin.edge_loss["white"] < 0.01
+    assert inf.instrument["name"] == "infinite" and inf.edge_loss == {"black": 0.0, "white": 0.0}
+
+
+def _brute(inst, backing, photons=200_000, band=0):
+    layer = [Layer(mua=0.03, mus=5.0, g=0.9, n=1.55, thickness=1.0)]
+    res = simulate(layer, n_photons=photons, seed=3, band=band, estimator="weighted",
+                   window=inst.window(backing, brute_force=True))
+    return inst.reading(res.window, res.window_stderr, brute_force=True), res
+
+
+def test_reciprocity_brute_force_and_pencil_profile_agree():
+    wide = instrument.Instrument(name="w", geometry="0-d", illuminated_diameter_mm=8.0,
+                                 viewed_diameter_mm=3.0)
+    narrow = instrument.Instrument(name="n", geometry="0-d", illuminated_diameter_mm=3.0,
+                                   viewed_diameter_mm=8.0)
+    (x, sx), _ = _brute(wide, 0.5, band=0)
+    (y, sy), _ = _brute(narrow, 0.5, band=1)
+    assert close(x, y, sx, sy), (x, sx, y, sy)
+    # the run dentalux makes (lighting the smaller disc) reads the same
+    layer = [Layer(mua=0.03, mus=5.0, g=0.9, n=1.55, thickness=1.0)]
+    res = simulate(layer, n_photons=200_000, seed=3, band=2, estimator="weighted",
+                   window=wide.window(0.5))
+    z, sz = wide.reading(res.window, res.window_stderr)
+    assert close(x, z, sx, sz)
+    # a pencil beam's exit profile convolved with the discs' overlap (backing inside)
+    pencil = instrument.Instrument(name="p", geometry="0-d", illuminated_diameter_mm=1e-9,
+                                   viewed_diameter_mm=1e6)
+    prof = simulate(layer, n_photons=400_000, seed=3, band=3, estimator="weighted",
+                    window=pencil.window(0.5), radial=(2000, 40.0))
+    spec = prof.window["viewed_specular"]
+    v = instrument.reading_from_profile(prof.radial_reflectance, 40.0, 4.0, 1.5) + spec
+    assert abs(v - x) <= 4 * sx + 0.002, (v, x, sx)  # + the profile's binning error
+    # edge loss is real: the infinite slab reads far more
+    assert prof.window["viewed_reflectance"] - x > 20 * sx
+
+
+def test_overlap_area_closed_forms():
+    assert instrument.overlap_area(0.0, 1.0, 2.0) == pytest.approx(math.pi)
+    assert instrument.overlap_area(3.5, 1.0, 2.0) == 0.0
+    # two unit discs one radius apart: 2π/3 − √3/2
+    assert instrument.overlap_area(1.0, 1.0, 1.0) == pytest.approx(2 * math.pi / 3 - 3**0.5 / 2)
+
+
+def test_energy_ledger_closes():
+    inst = instrument.Instrument(name="x", geometry="0-45", illuminated_diameter_mm=3.0,
+                                 viewed_diameter_mm=3.0, specimen_diameter_mm=6.0)
+    (_, _), res = _brute(inst, 0.9, photons=20_000)
+    w = res.window
+    total = (w["viewed_reflectance"] + w["outside_reflectance"] + w["rim_loss"]
+             + res.total_transmittance + res.absorbed)
+    assert total == pytest.approx(1.0, abs=1e-9)
+    assert w["rim_loss"] > 0
+
+
+def test_tp_rises_with_the_window():
+    tps = []
+    for d in (3.0, 10.0):
+        inst = instrument.get("contact-probe-3mm").override(illuminated_diameter_mm=d,
+                                                             viewed_diameter_mm=d,
+                                                             specimen_diameter_mm=20.0)
+        m = dental.metrics(SCATTERING, 1.0, bands=BANDS, photons=40_000, instrument=inst)
+        tps.append((m.tp, m.stderr["tp"]))
+    (a, sa), (b, sb) = tps
+    assert b - a > 4 * math.hypot(sa, sb), tps
+
+
+def test_presets_carry_provenance_for_every_number():
+    for name, inst in instrument.presets().items():
+        if inst.is_infinite:
+            continue
+        for key in ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm",
+                    "backing_black", "backing_white"):
+            entry = inst.provenance.get(key, "")
+            assert entry.split(":")[0] in ("measured", "transcribed", "derived", "assumed",
+                                           "fitted"), (name, key, entry)
+
+
+@pytest.mark.parametrize("change, field", [
+    (dict(viewed_diameter_mm=0.0), "viewed_diameter_mm"),
+    (dict(illuminated_diameter_mm=float("nan")), "illuminated_diameter_mm"),
+    (dict(geometry="d8-sci", viewed_diameter_mm=9.0), "viewed_diameter_mm"),
+    (dict(contact_index=0.9), "contact_index"),
+    (dict(backing_white=1.2), "backing_white"),
+    (dict(geometry="d9"), "geometry"),
+])
+def test_bad_instruments_name_the_field(change, field):
+    base = dict(name="t", geometry="0-45", illuminated_diameter_mm=3.0, viewed_diameter_mm=3.0)
+    with pytest.raises(ValueError, match=field):
+        instrument.Instrument(**{**base, **change})
+
+
+def test_unknown_instrument_suggests_a_preset(capsys):
+    with pytest.raises(ValueError, match="did you mean 'contact-probe-3mm'"):
+        instrument.get("contact-probe-3m")
+    with pytest.raises(SystemExit) as exc:
+        main(["shade", "enamel", "--instrument", "nope", "--json", "--bands", "550"])
+    assert exc.value.code == 2
+    assert "instrument" in capsys.readouterr().err
+    assert np.isfinite(instrument.get("infinite").white_fraction())
