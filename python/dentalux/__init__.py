@@ -6,9 +6,13 @@ Units everywhere: lengths in mm, coefficients in 1/mm, wavelengths in nm.
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _dist_version
 
-from dentalux.render import RenderResult, render
-from dentalux.scene import Scene, SceneError, load_scene, scene_from_dict
-from dentalux.slab import Layer, SlabResult
+from dentalux import _core, _guard
+
+_guard.install(_core)  # panics -> RuntimeError, overflows -> ValueError (dentalux._guard)
+
+from dentalux.render import RenderResult, render  # noqa: E402
+from dentalux.scene import Scene, SceneError, load_scene, scene_from_dict  # noqa: E402
+from dentalux.slab import Layer, SlabResult  # noqa: E402
 
 try:  # one home: pyproject.toml's [project] version, read from the installed metadata
     __version__ = _dist_version("dentalux")

@@ -266,3 +266,43 @@ def check_bands_in(bands, lo: float, hi: float, what: str, name: str = "bands",
                              f"cover [{lo:g}, {hi:g}] nm (and it allows no extrapolation)")
         out.append(x)
     return out
+
+
+# --- the slab's Python API (called by dentalux.slab) ----------------------------------------
+
+
+def check_layers(layers, name: str = "layers") -> list:
+    """A non-empty sequence of layers (``None``, a string or a scalar is a TypeError that
+    names the argument)."""
+    if layers is None or isinstance(layers, str | bytes) or not hasattr(layers, "__iter__"):
+        raise TypeError(f"{name} = {layers!r}: must be a list of dentalux.Layer, got "
+                        f"{type(layers).__name__}")
+    out = list(layers)
+    if not out:
+        raise ValueError(f"{name} = []: give at least one dentalux.Layer")
+    return out
+
+
+def check_lobes(lobes, name: str = "lobes") -> list[tuple[float, float]] | None:
+    """``None`` or a non-empty sequence of (weight, g) pairs of finite numbers, weights > 0,
+    g in (-1, 1)."""
+    if lobes is None:
+        return None
+    if isinstance(lobes, str | bytes) or not hasattr(lobes, "__iter__"):
+        raise TypeError(f"{name} = {lobes!r}: must be a list of (weight, g) pairs")
+    out = []
+    for i, lobe in enumerate(lobes):
+        if isinstance(lobe, str | bytes) or not hasattr(lobe, "__len__") or len(lobe) != 2:
+            raise TypeError(f"{name}[{i}] = {lobe!r}: must be a (weight, g) pair of numbers")
+        w, g = lobe
+        for part, v in (("weight", w), ("g", g)):
+            if isinstance(v, bool) or not isinstance(v, Real) or not math.isfinite(float(v)):
+                raise TypeError(f"{name}[{i}].{part} = {v!r}: must be a finite number")
+        if not float(w) > 0:
+            raise ValueError(f"{name}[{i}].weight = {w!r} is out of range: allowed > 0")
+        if not -1 < float(g) < 1:
+            raise ValueError(f"{name}[{i}].g = {g!r} is out of range: allowed (-1, 1)")
+        out.append((float(w), float(g)))
+    if not out:
+        raise ValueError(f"{name} = []: give at least one (weight, g) pair, or None")
+    return out

@@ -111,6 +111,7 @@ def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None =
                                        if "photon" in k})},
         "stats": result.stats["bands"],
         "files": files,
+        "files_read": scene.files_read() if hasattr(scene, "files_read") else [],
     }
     divisor, illuminant, light_white = colour_inputs(scene, result.bands)
     if regions is None and tuple(result.radiance.shape[1::-1]) == tuple(scene.resolution):

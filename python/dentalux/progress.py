@@ -21,12 +21,23 @@ def _interactive() -> bool:
 
 
 @contextmanager
-def bar(total: int, description: str, enabled: bool | None = None) -> Iterator[Callable | None]:
+def bar(total: int, description: str,
+        enabled: bool | None | Callable = None) -> Iterator[Callable | None]:
     """Yield a callback ``cb(done)`` that advances a progress bar to ``done`` of ``total``.
 
     Yields ``None`` (no bar) when disabled or when stderr is not a terminal, so batch jobs and
-    CI logs stay clean.
+    CI logs stay clean. ``enabled`` may also be the caller's own callable
+    ``progress(done, total)``: it is called instead of a bar, and an exception it raises
+    stops the computation and propagates to the caller.
     """
+    if callable(enabled):
+        user = enabled
+
+        def forward(done: int) -> None:
+            user(done, total)
+
+        yield forward
+        return
     if enabled is None:
         enabled = _interactive()
     if not enabled:

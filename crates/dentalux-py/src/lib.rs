@@ -11,6 +11,7 @@ use pyo3::prelude::*;
 /// The private native module, re-exported by the `dentalux` package.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    quiet_panics();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(slab::slab_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(slab::phase_sample_cos, m)?)?;
@@ -19,6 +20,15 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render::camera_project, m)?)?;
     m.add_function(wrap_pyfunction!(panic_in_worker, m)?)?;
     Ok(())
+}
+
+/// A panic in the core reaches Python as `RuntimeError` carrying the panic's message
+/// (runner.rs); the default hook would also print the panic text and a backtrace on
+/// stderr. Keep stderr clean unless `DENTALUX_PANIC_TRACE` is set (for debugging).
+fn quiet_panics() {
+    if std::env::var_os("DENTALUX_PANIC_TRACE").is_none() {
+        std::panic::set_hook(Box::new(|_| {}));
+    }
 }
 
 /// Panic inside a worker thread, as a bug in the core would: for the test that a panic

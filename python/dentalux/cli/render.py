@@ -94,11 +94,15 @@ def render_command(
         None, help="run the band x pass tasks on Dask: local:N (LocalCluster of N workers) "
                    "or tcp://HOST:PORT (a running scheduler)"),
     as_json: bool = typer.Option(False, "--json", help="print render.json on stdout"),
+    allow_outside_paths: bool = typer.Option(
+        False, "--allow-outside-paths",
+        help="let the scene read mesh and image files outside its folder (absolute paths, "
+             "'..', symbolic links leading out)"),
 ) -> None:
     """Render a scene to DIR/radiance.npy, DIR/render.json and PNG previews."""
     t0 = time.perf_counter()
     out = check_out_dir(out, "--out", overwrite=overwrite)
-    scene = load_scene(scene_file)
+    scene = load_scene(scene_file, allow_outside_paths=allow_outside_paths)
     band_list = parse_bands(bands)
     options = {k_: v for k_, v in (("volume_photons", volume_photons),
                                    ("volume_stored", volume_stored), ("aim", aim), ("k", k),

@@ -22,10 +22,13 @@ def check_command(
     dump: bool = typer.Option(False, "--dump", help="print the resolved scene JSON per band"),
     bands: str = typer.Option(None, help="bands for --dump [nm] (default: the scene's)"),
     as_json: bool = typer.Option(False, "--json", help="print the summary as JSON"),
+    allow_outside_paths: bool = typer.Option(
+        False, "--allow-outside-paths",
+        help="let the scene read files outside its folder"),
 ) -> None:
     """Validate SCENE_FILE (exit code 2 with the key path on error) and summarise it."""
-    scene = load_scene(scene_file)
-    summary = scene.summary()
+    scene = load_scene(scene_file, allow_outside_paths=allow_outside_paths)
+    summary = dict(scene.summary(), files_read=scene.files_read())
     if dump:
         band_list = parse_bands(bands) or scene.bands
         print(json.dumps({

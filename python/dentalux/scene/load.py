@@ -29,17 +29,24 @@ def read_toml(path: str | Path) -> dict:
             return tomllib.load(f)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{p}: not valid TOML ({exc})") from None
+    except RecursionError:
+        raise SceneError(f"{p}: not valid TOML for a scene (arrays or tables nested too "
+                         "deeply)") from None
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Load and validate a TOML scene file."""
+def load_scene(path: str | Path, allow_outside_paths: bool = False) -> Scene:
+    """Load and validate a TOML scene file. The files it names are read relative to its
+    folder and must stay inside it unless ``allow_outside_paths`` (dentalux.scene.files)."""
     p = Path(path)
-    return Scene(read_toml(p), base_dir=p.resolve().parent, source=str(p))
+    return Scene(read_toml(p), base_dir=p.resolve().parent, source=str(p),
+                 allow_outside_paths=allow_outside_paths)
 
 
-def scene_from_dict(d: dict, base_dir: str | Path | None = None) -> Scene:
-    """Validate a scene given as a dict (the same keys as the TOML format)."""
-    return Scene(d, base_dir=base_dir, source=None)
+def scene_from_dict(d: dict, base_dir: str | Path | None = None,
+                    allow_outside_paths: bool = False) -> Scene:
+    """Validate a scene given as a dict (the same keys as the TOML format); its files are
+    read relative to ``base_dir`` (default: the current folder)."""
+    return Scene(d, base_dir=base_dir, source=None, allow_outside_paths=allow_outside_paths)
 
 
 def as_scene(scene) -> Scene:

@@ -35,7 +35,7 @@ def load_mesh(f: Path, path: str = "mesh.file", file: str | None = None) -> Mesh
     if f.suffix.lower() not in SUFFIXES:
         raise SceneError(f"{path} = '{file}': unsupported mesh format (allowed: .obj, .ply)")
     if not f.is_file():
-        raise SceneError(f"{path} = '{file}': file not found (looked for {f.resolve()})")
+        raise SceneError(f"{path} = '{file}': file not found")
     import trimesh  # deferred: a 0.2 s import, needed only for mesh files
 
     try:
@@ -44,6 +44,10 @@ def load_mesh(f: Path, path: str = "mesh.file", file: str | None = None) -> Mesh
         raise SceneError(f"{path} = '{file}': cannot read the mesh ({exc})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise SceneError(f"{path} = '{file}': the file holds no triangles")
+    bad = ~np.isfinite(np.asarray(mesh.vertices, dtype=float)).all(axis=1)
+    if bad.any():
+        raise SceneError(f"{path} = '{file}': vertex {int(np.argmax(bad)) + 1} is not finite "
+                         "(NaN or inf); every coordinate must be a finite number [mm]")
     uv = getattr(mesh.visual, "uv", None)
     uvs = None
     if uv is not None and len(uv) == len(mesh.vertices):

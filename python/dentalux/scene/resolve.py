@@ -133,7 +133,7 @@ class Scene:
     """
 
     def __init__(self, description: dict, base_dir: str | Path | None = None,
-                 source: str | None = None):
+                 source: str | None = None, allow_outside_paths: bool = False):
         # validate() builds new containers and never mutates its input (tested), so no copy
         self.description = validate(description)
         self.base_dir = Path(base_dir) if base_dir is not None else Path.cwd()
@@ -141,7 +141,9 @@ class Scene:
         d = self.description
         self.media_names = list(d["media"])
         self.surface_names = list(d["surfaces"])
+        self.allow_outside_paths = bool(allow_outside_paths)
         self._files: dict[str, str] = {}
+        self._file_names: dict[str, str] = {}
         self._hash: str | None = None
         self._images = self._load_images()
         self._shapes = [self._shape(i, s) for i, s in enumerate(d["shapes"])]
@@ -211,9 +213,19 @@ class Scene:
 
     # -- geometry (band independent) ---------------------------------------------------
 
-    def _file(self, name: str) -> Path:
-        p = Path(name)
-        return p if p.is_absolute() else self.base_dir / p
+    def _file(self, name: str, key: str, kind: str) -> Path:
+        """The checked path of a mesh or image file (dentalux.scene.files)."""
+        from dentalux.scene.files import scene_file
+
+        f = scene_file(name, self.base_dir, key, kind, self.allow_outside_paths)
+        self._file_names[key] = name
+        return f
+
+    def files_read(self) -> list[dict]:
+        """Every file this scene read: its scene key, its name as the scene gives it and
+        the SHA-256 of its bytes (``render.json``'s ``files_read``)."""
+        return [{"key": k, "file": self._file_names.get(k), "sha256": v}
+                for k, v in sorted(self._files.items())]
 
     def _load_images(self) -> dict[str, dict]:
         out = {}
@@ -224,13 +236,17 @@ class Scene:
             if s["file"] is None:
                 out[name] = {"width": s["width"], "height": s["height"], "data": s["data"]}
                 continue
-            f = self._file(s["file"])
-            if not f.is_file():
-                raise fail(path, s["file"], f"file not found (looked for {f.resolve()})")
+            f = self._file(s["file"], path, "image")
             from PIL import Image
+
+            from dentalux.limits import check_texture
 
             try:
                 img = Image.open(f)
+            except Exception as exc:
+                raise fail(path, s["file"], f"cannot read the image ({exc})") from None
+            check_texture(img.width, img.height, f"{path} = '{s['file']}'")
+            try:
                 img.load()
             except Exception as exc:
                 raise fail(path, s["file"], f"cannot read the image ({exc})") from None
@@ -264,7 +280,7 @@ class Scene:
                        height=s["height"])
         elif s["type"] == "mesh":
             if s["file"] is not None:
-                f = self._file(s["file"])
+                f = self._file(s["file"], f"{path}.file", "mesh")
                 data = load_mesh(f, f"{path}.file", s["file"])
                 self._files[f"{path}.file"] = _file_digest(f)
             else:

@@ -112,8 +112,11 @@ LIGHT_SPECTRA = ("D65", "flat")
 
 TRANSFORM_KEYS = {"scale": None, "rotate": None, "translate": None, "matrix": None}
 
-# Wavelengths the spectra (D65, colour matching) are defined on [nm].
-BAND_RANGE_NM = (300.0, 830.0)
+# The colour range [nm]: the CIE colour-matching functions are defined on 360-830 nm (D65
+# on 300-830 nm). One rule for every command (docs/limits.md): a band lies in this range
+# and, for a material, in its data range unless the material allows extrapolation
+# (dentalux.limits.check_bands_in).
+BAND_RANGE_NM = (360.0, 830.0)
 
 
 # ---------------------------------------------------------------------------------------
@@ -596,7 +599,7 @@ def validate_render(r: Any) -> dict:
 
 
 def validate_bands(bands: Any, path: str = "bands") -> list[float]:
-    """Wavelength bands [nm]: a non-empty list of distinct numbers within 300-830 nm."""
+    """Wavelength bands [nm]: a non-empty list of distinct numbers within 360-830 nm."""
     if isinstance(bands, Real) and not isinstance(bands, bool):
         bands = [bands]
     seq = _seq(bands, path)

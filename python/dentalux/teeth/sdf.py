@@ -33,6 +33,9 @@ class Grid:
         lo = np.asarray(lo, float) - pad * spacing
         hi = np.asarray(hi, float) + pad * spacing
         shape = tuple(int(v) for v in np.ceil((hi - lo) / spacing).astype(int) + 1)
+        from dentalux.limits import check_grid
+
+        check_grid(shape, spacing)  # refuse a grid that cannot fit in memory, before it exists
         return Grid(tuple(float(v) for v in lo), float(spacing), shape)
 
     def axes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

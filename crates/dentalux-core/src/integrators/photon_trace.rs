@@ -18,7 +18,7 @@
 //! parallel (rayon) and are concatenated in batch order, so maps do not depend on threads.
 
 use crate::control::Control;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::geometry::Ray;
 use crate::integrators::aim::Aim;
 use crate::integrators::transport::{cross, spawn};
@@ -358,6 +358,22 @@ pub struct Emission {
     pub surface_first: Option<u64>,
 }
 
+/// The error for photon maps that cannot be allocated: a user-set photon count too large
+/// for this machine's memory (an allocation failure would otherwise abort the process).
+fn too_many_photons(photons: usize) -> Error {
+    Error::InvalidInput(format!(
+        "photon maps of {photons} photons ({} bytes) cannot be allocated: out of memory; \
+         ask for fewer photons (photons, volume_photons, volume_stored)",
+        photons.saturating_mul(std::mem::size_of::<Photon>())
+    ))
+}
+
+/// Make room for `extra` more photons in `v`, or fail with [`too_many_photons`].
+fn grow(v: &mut Vec<Photon>, extra: usize) -> Result<()> {
+    v.try_reserve(extra)
+        .map_err(|_| too_many_photons(v.len().saturating_add(extra)))
+}
+
 /// [`trace_photons_with`] with a stored-photon budget and aimed emission.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_emission(
@@ -430,8 +446,10 @@ pub fn trace_emission(
             };
             for (v, ov) in volume.iter_mut().zip(o.volume) {
                 stored += ov.len() as u64;
+                grow(v, ov.len())?;
                 v.extend_from_slice(&ov);
             }
+            grow(&mut surface, o.surface.len())?;
             surface.extend_from_slice(&o.surface);
             ledger.add(&o.ledger);
             emitted += o.traced;
@@ -445,7 +463,8 @@ pub fn trace_emission(
             for v in volume.iter_mut().filter(|v| !v.is_empty()) {
                 let share = cap as f64 * v.len() as f64 / stored.max(1) as f64;
                 let target = (1.05 * share) as usize + BATCH as usize;
-                v.reserve_exact(target.saturating_sub(v.len()));
+                v.try_reserve_exact(target.saturating_sub(v.len()))
+                    .map_err(|_| too_many_photons(target))?;
             }
         }
         start = end;
@@ -553,4 +572,18 @@ pub fn trace_camera_maps(
     }
     maps.ledger.stored_surface = maps.surface.total_power();
     Ok(maps)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn photon_maps_too_large_for_memory_are_an_error_not_an_abort() {
+        let mut v: Vec<Photon> = Vec::new();
+        // more bytes than any address space: refused without allocating
+        let e = grow(&mut v, usize::MAX / 4).unwrap_err();
+        assert!(matches!(e, Error::InvalidInput(ref m) if m.contains("out of memory")));
+        assert!(grow(&mut v, 16).is_ok() && v.capacity() >= 16);
+    }
 }
