@@ -180,3 +180,39 @@ def test_garbage_obj(folder):
 def test_nan_vertex(folder):
     (folder / "nan.obj").write_text(CUBE_OBJ.replace("v 0 0 0", "v nan 0 0", 1))
     refused(with_mesh("nan.obj"), folder, r"'nan\.obj': vertex 1 is not finite")
+
+
+def _glass(*shapes, lights=None) -> dict:
+    d = read_toml(CORNELL)
+    d["media"] = {"glass": {"mua": 0.0, "mus": 0.0, "n": 1.5},
+                  "resin": {"mua": 0.01, "mus": 1.0, "n": 1.5}}
+    d["shapes"] = d["shapes"][:1] + list(shapes)
+    if lights is not None:
+        d["lights"] = lights
+    return d
+
+
+def _cyl(x, radius=50.0, height=20.0, inside="glass", outside="air"):
+    return {"type": "cylinder", "center": [x, 100.0, 200.0], "axis": [0.0, 1.0, 0.0],
+            "radius": radius, "height": height, "inside": inside, "outside": outside}
+
+
+def test_crossing_dielectric_boundaries(tmp_path):
+    with pytest.raises(SceneError, match=r"shapes\[1\] and shapes\[2\].*overlap in part"):
+        scene_from_dict(_glass(_cyl(200.0), _cyl(260.0, inside="resin")), base_dir=tmp_path)
+    # apart, touching along a line, and nested are all fine
+    scene_from_dict(_glass(_cyl(200.0), _cyl(320.0, inside="resin")), base_dir=tmp_path)
+    scene_from_dict(_glass(_cyl(200.0), _cyl(300.0, inside="resin")), base_dir=tmp_path)
+    scene_from_dict(_glass(_cyl(200.0), _cyl(200.0, radius=10, height=5, inside="resin",
+                                             outside="glass")), base_dir=tmp_path)
+    stacked = _cyl(200.0, inside="resin")
+    stacked["center"] = [200.0, 120.0, 200.0]  # standing on the first disc's top face
+    scene_from_dict(_glass(_cyl(200.0), stacked), base_dir=tmp_path)
+
+
+def test_point_light_inside_a_disc(tmp_path):
+    light = {"type": "point", "position": [200.0, 110.0, 200.0], "intensity": 1.0}
+    with pytest.raises(SceneError, match=r"lights\[0\]: lies inside shapes\[1\]"):
+        scene_from_dict(_glass(_cyl(200.0), lights=[light]), base_dir=tmp_path)
+    light["position"] = [200.0, 300.0, 200.0]
+    scene_from_dict(_glass(_cyl(200.0), lights=[light]), base_dir=tmp_path)

@@ -148,7 +148,7 @@ def test_cli_progressive_writes_passes_error_and_last_radius(tmp_path, capsys):
     assert rj["progressive"]["error_estimate"] > 0
     capsys.readouterr()
     with pytest.raises(SystemExit) as exc:
-        main(["render", str(DISCS), "--out", str(out), "--target-rmse", "2"])
+        main(["render", str(DISCS), "--out", str(tmp_path / "p"), "--target-rmse", "2"])
     assert exc.value.code == 2 and "target_rmse" in capsys.readouterr().err
 
 

@@ -840,8 +840,12 @@ def test_nested_media_must_be_declared_consistently():
     d["shapes"][1]["outside"] = "enamel"
     media = [m["name"] for m in scene_from_dict(d).resolve(540)["media"]]
     assert media == ["air", "enamel", "dentin"]
-    # Moved so that it pokes out of the sphere: not contained, no constraint.
+    # Moved so that it pokes out of the sphere: the boundaries cross (issue 18, item 10).
     d["shapes"][1].update(center=[0, 0, 7], outside="air")
+    with pytest.raises(SceneError, match=r"shapes\[0\] and shapes\[1\].*overlap in part"):
+        scene_from_dict(d)
+    # Moved clear of the sphere: no constraint.
+    d["shapes"][1].update(center=[0, 0, 9])
     scene_from_dict(d)
 
 

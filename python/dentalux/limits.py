@@ -46,8 +46,8 @@ PIXEL_BAND_BYTES = 48
 PIXEL_COLOUR_BYTES = 256
 #: bytes per grid node of a procedural tooth (signed-distance fields in float64)
 TOOTH_NODE_BYTES = 96
-#: bytes per texel of an image texture once decoded (float64 RGB and its copies)
-TEXEL_BYTES = 64
+#: bytes per texel of an image texture once decoded (a Python float list, JSON, the core)
+TEXEL_BYTES = 128
 
 
 def logical_cores() -> int:

@@ -151,6 +151,8 @@ class Scene:
         self._shapes_plain: list | None = None
         self._check_camera()
         self._check_nesting()
+        self._check_crossing()
+        self._check_lights()
         # Resolve at every default band: unknown material names and tables that miss a
         # band fail here, at load time, rather than mid-render.
         for wl in d["render"]["bands"]:
@@ -330,6 +332,12 @@ class Scene:
 
     def _corners(self, shape: dict) -> np.ndarray:
         """The 8 world-space corners of a shape's object-space bounding box."""
+        return self._box_points(shape, 2)
+
+    def _box_points(self, shape: dict, n: int, interior: bool = False) -> np.ndarray:
+        """World-space points of an n x n x n grid over a shape's object-space bounding box:
+        its corners, or with ``interior`` the grid cells' centres (strictly inside the
+        box, so shapes that only touch share none of them)."""
         if shape["type"] == "sphere":
             c, r = np.asarray(shape["center"]), shape["radius"]
             lo, hi = c - r, c + r
@@ -344,9 +352,64 @@ class Scene:
         else:
             pos = np.asarray(shape["positions"])
             lo, hi = pos.min(axis=0), pos.max(axis=0)
-        box = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                        for z in (lo[2], hi[2])])
+        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+        t = (np.arange(n) + 0.5) / n if interior else np.linspace(0.0, 1.0, n)
+        axes = [lo[a] + t * (hi[a] - lo[a]) for a in range(3)]
+        box = np.array([[x, y, z] for x in axes[0] for y in axes[1] for z in axes[2]])
         return tf.apply_point(np.asarray(shape["transform"]), box)
+
+    #: grid cells per axis that sample a shape's inside for the crossing check
+    CROSSING_SAMPLES = 7
+
+    def _check_crossing(self) -> None:
+        """Two dielectric spheres, boxes or cylinders may nest or touch, but not overlap in
+        part: their boundaries would cross, and a photon between them would be in two media
+        at once. Detected by sampling each shape's inside on a 7 x 7 x 7 grid, so an
+        overlap thinner than about a seventh of the smaller shape may pass; meshes are
+        checked by the core's own nesting rules only (docs/scene-format.md)."""
+        shapes, desc = self._shapes, self.description["shapes"]
+        convex = [i for i, s in enumerate(desc) if s["boundary"]["kind"] == "dielectric"
+                  and shapes[i]["type"] in ("sphere", "box", "cylinder")]
+        corners = {i: self._corners(shapes[i]) for i in convex}
+        for a, i in enumerate(convex):
+            for j in convex[a + 1:]:
+                ci, cj = corners[i], corners[j]
+                if np.any(ci.max(axis=0) <= cj.min(axis=0)) or \
+                        np.any(cj.max(axis=0) <= ci.min(axis=0)):
+                    continue  # bounding boxes apart
+                frac = []
+                for k, other in ((i, j), (j, i)):
+                    pts = self._box_points(shapes[k], self.CROSSING_SAMPLES, interior=True)
+                    inside = [p for p in pts if self._contains(shapes[k], p)]
+                    hits = sum(self._contains(shapes[other], p) for p in inside)
+                    frac.append(hits / max(1, len(inside)))
+                if max(frac) == 1.0 or max(frac) == 0.0:
+                    continue  # nested (possibly sharing a face), apart or touching
+                raise SceneError(
+                    f"shapes[{i}] and shapes[{j}]: the two dielectric {desc[i]['type']} and "
+                    f"{desc[j]['type']} overlap in part, so their boundaries cross; nest one "
+                    "wholly inside the other or move them apart")
+
+    def _check_lights(self) -> None:
+        """Lights emit into the scene's ambient medium, so a light inside a dielectric shape
+        (a point light inside a disc) is refused rather than traced in the wrong medium."""
+        desc = self.description
+        for li, lt in enumerate(desc["lights"]):
+            if lt["type"] in ("point", "spot"):
+                pos = np.asarray(lt["position"], float)
+            elif lt["type"] == "disc":
+                pos = np.asarray(lt["center"], float)
+            else:
+                pos = np.asarray(lt["corner"], float) + 0.5 * (np.asarray(lt["u"], float)
+                                                               + np.asarray(lt["v"], float))
+            for i, shape in enumerate(self._shapes):
+                if desc["shapes"][i]["boundary"]["kind"] != "dielectric":
+                    continue
+                if self._contains(shape, pos, meshes=True):
+                    raise SceneError(
+                        f"lights[{li}]: lies inside shapes[{i}] (a dielectric "
+                        f"{desc['shapes'][i]['type']}); lights emit into the ambient medium, "
+                        "so place them outside every dielectric shape")
 
     def _volume(self, shape: dict) -> float:
         m = abs(np.linalg.det(np.asarray(shape["transform"])[:3, :3]))
