@@ -6,7 +6,8 @@ PIP := $(VENV)/bin/pip
 STAMP := $(VENV)/.deps-stamp
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
-.PHONY: readme-figures demo test setup build-dev build-prod lint fmt rust-test py-test validate bench clean
+.PHONY: readme-figures demo test setup build-dev build-prod lint fmt rust-test py-test validate bench clean \
+	wheel wheel-test browser
 
 $(STAMP): pyproject.toml
 	python3 -m venv $(VENV)
@@ -24,6 +25,24 @@ build-prod: setup
 
 build-dev: setup
 	VIRTUAL_ENV=$(abspath $(VENV)) $(VENV)/bin/maturin develop --quiet --extras test,cluster
+
+# Release wheel (maturin) in dist/: the extension and the Python package with its data files,
+# scenes and report template. `pip install dist/dentalux-*.whl` is the install a lab makes.
+wheel: setup
+	rm -f dist/dentalux-*.whl
+	VIRTUAL_ENV=$(abspath $(VENV)) $(VENV)/bin/maturin build --release --quiet --out dist
+
+# The wheel installed into a throwaway venv and used from outside the checkout.
+wheel-test: wheel
+	tests/wheel_smoke.sh dist/dentalux-*.whl
+
+# Headless Chromium for the report's browser test (tests/test_report.py): Debian's package,
+# installed only when missing and only as root; without it that test skips, saying why.
+browser:
+	@command -v chromium >/dev/null || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; \
+	  else echo "browser: no chromium and not root: the report's browser test will skip"; fi; }
 
 # The main job: the paper's figures at preview quality (a few minutes on 2 cores).
 demo: build-prod
@@ -50,7 +69,7 @@ rust-test:
 py-test: build-prod
 	$(VENV)/bin/pytest -q
 
-test: build-prod lint rust-test py-test
+test: build-prod browser lint rust-test py-test wheel-test
 
 validate: build-prod
 	$(VENV)/bin/pytest -q -m slow

@@ -13,7 +13,7 @@ import shutil
 from html.parser import HTMLParser
 
 import pytest
-from dentalux import dental, report
+from dentalux import report
 
 TOML = """
 [materials.toy]
@@ -75,6 +75,8 @@ def _expected_cells(shade_json: dict) -> dict[str, tuple[object, str]]:
             text = f"{value:.{report.DIGITS[top]}f}"
         elif isinstance(value, float):
             text = f"{value:.4g}"
+        elif value is None:
+            text = "—"
         else:
             text = str(value)
         cells[key] = (value, text)
@@ -96,13 +98,14 @@ class _Cells(HTMLParser):
             self._section = self.sections.setdefault(a["data-material"], {})
         elif self._section is not None and "data-key" in a:
             self._cell, self._value, self._text = a["data-key"], a["data-value"], ""
+            self._tag = tag
 
     def handle_data(self, data):
         if self._cell is not None:
             self._text += data
 
     def handle_endtag(self, tag):
-        if self._cell is not None and tag == "td":
+        if self._cell is not None and tag == self._tag:
             self._section.setdefault(self._cell, (self._value, self._text.strip()))
             self._cell = None
         if tag == "section":
@@ -135,10 +138,18 @@ def test_page_is_self_contained_and_complete(made):
     assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", text)
     assert "<script" not in text and "<link" not in text
     assert len(re.findall(r'<img src="data:image/png;base64,', text)) == 3
-    assert "infinite geometry" in text
+    for out in made["shade"].values():  # the geometry the numbers were read in is stated
+        assert report._geometry(out)["short"] in text
     assert f"dentalux {__version__}" in text and 'id="seed">7<' in text
     for needle in ("report test material", "Zoller", "PT 0.8", "AT 1.8", "toy", "dentin"):
         assert needle in text, needle
+
+
+def test_infinite_geometry_is_stated():
+    instrument = "infinite" if report.has_instruments() else None
+    html = report.render_html(report.build("enamel", 1.0, instrument=instrument, bands="paper",
+                                           photons=300, tp_thicknesses=[1.0]))
+    assert 'id="infinite-geometry">infinite geometry: a laterally infinite disc' in html
 
 
 def test_instrument_sections_are_rendered_from_the_json(monkeypatch, tmp_path):
@@ -153,7 +164,7 @@ def test_instrument_sections_are_rendered_from_the_json(monkeypatch, tmp_path):
         return out
 
     monkeypatch.setattr(report, "shade_json", with_instrument)
-    ctx = report.build(["enamel"], 0.8, instrument="spectro-x", bands="paper", photons=500,
+    ctx = report.build(["enamel"], 0.8, bands="paper", photons=500,
                        tp_thicknesses=[1.0])
     html = report.render_html(ctx)
     parser = _Cells()
@@ -173,10 +184,11 @@ def test_bad_arguments_are_refused_before_any_work(tmp_path):
                         "--photons", "200", "--out", str(tmp_path / "r.html")])
     assert rc == 2 and "no-such-material" in err
     assert not list(tmp_path.iterdir())  # nothing written, not even a partial file
-    if not hasattr(dental, "shade"):
-        rc, _, err = _main(["report", "enamel", "--thickness", "1", "--instrument", "x",
-                            "--bands", "paper", "--out", str(tmp_path / "r.html")])
-        assert rc == 2 and "--instrument" in err
+    rc, _, err = _main(["report", "enamel", "--thickness", "1", "--instrument", "no-such-x",
+                        "--bands", "paper", "--photons", "200", "--out",
+                        str(tmp_path / "r.html")])
+    assert rc == 2 and ("no-such-x" in err if report.has_instruments() else "--instrument" in err)
+    assert not list(tmp_path.iterdir())
 
 
 def _chromium() -> str | None:
@@ -207,7 +219,7 @@ def test_report_in_headless_chromium(made):
             assert page.title().startswith("dentalux shade report")
             for material, out in made["shade"].items():
                 section = page.locator(f'section[data-material="{material}"]')
-                cells = section.locator("td[data-key]").evaluate_all(
+                cells = section.locator("[data-key]").evaluate_all(
                     "els => els.map(e => [e.dataset.key, e.dataset.value, e.innerText.trim()])")
                 found = {}
                 for key, raw, text in cells:
@@ -219,7 +231,7 @@ def test_report_in_headless_chromium(made):
             assert len(images) == 3
             for complete, nw, nh, w, h in images:
                 assert complete and nw > 0 and nh > 0 and w > 0 and h > 0, images
-            assert page.locator("#infinite-geometry").is_visible()
+            assert page.locator("#geometry .note").first.is_visible()
             shot = made["tmp"] / "report.png"
             page.screenshot(path=str(shot), full_page=True)
         finally:

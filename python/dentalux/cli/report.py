@@ -25,14 +25,18 @@ def report_command(
     out: Path = typer.Option(..., "--out", help="the report, an .html file (replaced if it "
                              "exists)"),
     against: str = typer.Option(None, help="reference material (name or TOML) for ΔE00/ΔTP00"),
-    instrument: str = typer.Option(None, help="instrument whose geometry reads the disc "
-                                   "(default: infinite geometry)"),
+    instrument: str = typer.Option(None, help="instrument preset, TOML file or 'infinite' "
+                                   "(default: that of `dentalux shade`)"),
+    match: str = typer.Option(None, help="the nearest tabs of a shade guide (as `shade "
+                              "--match`)"),
     bands: str = typer.Option("full", help="'full' (380-780 nm/10 nm), 'full:STEP', 'paper' "
                               "or a comma-separated nm list"),
-    backing_black: float = typer.Option(0.0, help="black backing reflectance, in [0, 1]"),
-    backing_white: float = typer.Option(0.9, help="white backing reflectance, in [0, 1]"),
+    backing_black: float = typer.Option(None, help="black backing reflectance in [0, 1] "
+                                        "(default: the instrument's, else 0)"),
+    backing_white: float = typer.Option(None, help="white backing reflectance in [0, 1] "
+                                        "(default: the instrument's, else 0.9)"),
     contact: float = typer.Option(None, help="optical contact: coupling medium index (>= 1); "
-                                  "default an air gap"),
+                                  "default the instrument's (an air gap)"),
     photons: int = typer.Option(dental.DEFAULT_PHOTONS, help="photons per band and run"),
     seed: int = typer.Option(1, help="random seed"),
     estimator: str = typer.Option("weighted", help="weighted | analog"),
@@ -56,7 +60,7 @@ def report_command(
                              "thicknesses [mm]") from None
     report.check_out(out)  # refuse a bad --out before any photon is traced
     path = report.write(out, materials, thickness, against=against, instrument=instrument,
-                        tp_thicknesses=ts, figure=figure,
+                        match=match, tp_thicknesses=ts, figure=figure,
                         command=_command(), bands=_bands(bands),
                         backing_black=backing_black, backing_white=backing_white,
                         contact=contact, photons=photons, seed=seed, estimator=estimator,

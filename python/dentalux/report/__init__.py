@@ -30,7 +30,7 @@ from dentalux import dental
 
 #: decimals shown for each JSON key (the full value is in the cell's data-value)
 DIGITS = {"lab_black": 2, "lab_white": 2, "lab_transmitted": 2, "tp": 2, "tp00": 2,
-          "cr": 4, "op": 2, "delta_e00": 2, "delta_tp00": 2}
+          "cr": 4, "op": 2, "delta_e00": 2, "delta_tp00": 2, "delta_e00_stderr": 2}
 LAB_ROWS = (("lab_black", "over black"), ("lab_white", "over white"),
             ("lab_transmitted", "transmitted"))
 SCALAR_ROWS = (("tp", "TP (ΔE*ab, black against white)"),
@@ -38,6 +38,7 @@ SCALAR_ROWS = (("tp", "TP (ΔE*ab, black against white)"),
                ("cr", "CR = Y over black / Y over white"),
                ("op", "OP (Δa*b*, transmitted against over black)"))
 COMPARE_KEYS = ("delta_e00", "delta_tp00", "verdict")
+COMPARE_SHOWN = COMPARE_KEYS + ("delta_e00_stderr",)
 SECTION_KEYS = ("instrument", "edge_loss", "shade_match")
 #: thickness factors of the TP-vs-thickness chart when none are given (times --thickness)
 TP_FACTORS = (0.25, 0.5, 1.0, 1.5, 2.0)
@@ -46,18 +47,30 @@ FIGURE_SUFFIXES = {".png": (b"\x89PNG\r\n\x1a\n", "image/png"),
                                                                    "image/jpeg")}
 
 
-def shade_json(material, thickness: float, against=None, instrument=None, **kw) -> dict:
+INFINITE_NOTE = ("infinite geometry: a laterally infinite disc on an ideal Lambertian "
+                 "backing, normal illumination, all reflected light collected (SCI); no "
+                 "instrument aperture and no edge loss")
+
+
+def has_instruments() -> bool:
+    """Whether this dentalux reads through instruments (``dental.shade``, issue 9)."""
+    return hasattr(dental, "shade")
+
+
+def shade_json(material, thickness: float, against=None, instrument=None, match=None,
+               **kw) -> dict:
     """The object ``dentalux shade --json`` prints for these arguments.
 
     ``kw``: the keyword arguments of :func:`dentalux.dental.metrics` (bands, backings,
     contact, photons, seed, estimator, observer, illuminant, threads)."""
     kw.setdefault("progress", False)
-    shade = getattr(dental, "shade", None)
-    if shade is not None:
-        return shade(material, thickness, against=against, instrument=instrument, **kw)
-    if instrument is not None:  # instruments arrive with issue 9's dental.shade
-        raise ValueError(f"--instrument = {instrument!r}: this dentalux knows no instruments "
-                         "yet (infinite geometry only)")
+    if has_instruments():
+        return dental.shade(material, thickness, against=against, instrument=instrument,
+                            match=match, **kw)
+    for name, value in (("--instrument", instrument), ("--match", match)):
+        if value is not None:  # instruments and shade guides arrive with dental.shade
+            raise ValueError(f"{name} = {value!r}: this dentalux reads the infinite geometry "
+                             "only (no instruments or shade guides)")
     m = dental.metrics(material, thickness, **kw)
     out = m.to_json()
     if against:
@@ -104,6 +117,34 @@ def _generic_rows(obj, prefix: str) -> list[dict]:
     return rows
 
 
+def _spectra(material, thickness: float, instrument, kw: dict):
+    """The disc's spectra (``DentalMetrics``) read as ``shade`` reads it."""
+    if has_instruments():
+        from dentalux import instrument as instruments
+
+        return dental.metrics(material, thickness, instrument=instruments.DEFAULT
+                              if instrument is None else instrument, **kw)
+    return dental.metrics(material, thickness, **kw)
+
+
+def _geometry(out: dict) -> dict:
+    """How the numbers were read, from the JSON's ``instrument`` object (none: the infinite
+    geometry, as before instruments existed)."""
+    ins = out.get("instrument")
+    if not isinstance(ins, dict) or not ins or ins.get("name") == "infinite":
+        text = INFINITE_NOTE + (" (instrument 'infinite')" if isinstance(ins, dict) and ins
+                                else "")
+        return {"text": text, "infinite": True, "short": "infinite geometry"}
+    parts = [f"As read by instrument {ins.get('name')}"]
+    for key, label, unit in (("geometry", "geometry", ""), ("illuminated_diameter_mm",
+                             "lit spot", " mm"), ("viewed_diameter_mm", "viewed window", " mm"),
+                             ("specular", "specular component", "")):
+        if ins.get(key) is not None:
+            parts.append(f"{label} {ins[key]}{unit}")
+    return {"text": ", ".join(parts), "infinite": False,
+            "short": f"instrument {ins.get('name')}"}
+
+
 def _provenance(mat) -> dict:
     """What the page says about where a material's values came from."""
     prov = dict(getattr(mat, "provenance", {}) or {})
@@ -138,6 +179,15 @@ def _tp_thicknesses(thickness: float, given) -> list[float]:
     return sorted(set(ts) | {float(thickness)})
 
 
+def _input_text(key: str, value) -> str:
+    """An option's value as the inputs table shows it."""
+    if key == "contact" and value is None:
+        return "— (the instrument's)" if has_instruments() else "air gap"
+    if isinstance(value, list | tuple | np.ndarray):
+        return ", ".join(f"{x:g}" for x in value)
+    return str(value)
+
+
 def _figure(path) -> dict:
     """A rendered image to embed (``--figure``): PNG or JPEG, checked by its magic bytes."""
     p = Path(path)
@@ -152,8 +202,8 @@ def _figure(path) -> dict:
     return {"name": p.name, "src": f"data:{kind[1]};base64,{base64.b64encode(blob).decode()}"}
 
 
-def build(materials, thickness: float, against=None, instrument=None, tp_thicknesses=None,
-          figure=None, command: str | None = None, **kw) -> dict:
+def build(materials, thickness: float, against=None, instrument=None, match=None,
+          tp_thicknesses=None, figure=None, command: str | None = None, **kw) -> dict:
     """Everything the report shows, as plain data for the template (see module doc)."""
     from dentalux import __version__
     from dentalux.report import charts
@@ -170,15 +220,22 @@ def build(materials, thickness: float, against=None, instrument=None, tp_thickne
     mats = {str(s): dental._resolve_material(s) for s in specs}
     sections = []
     for spec in materials:
-        out = shade_json(spec, thickness, against=against, instrument=instrument, **kw)
-        m = dental.metrics(spec, thickness, **kw)  # the disc's spectra (infinite geometry)
+        out = shade_json(spec, thickness, against=against, instrument=instrument, match=match,
+                         **kw)
+        m = _spectra(spec, thickness, instrument, kw)
         tp = []
         for t in ts:
             j = out if t == float(thickness) else shade_json(spec, t, instrument=instrument,
                                                               **kw)
             tp.append((t, j["tp"], j["tp00"]))
         sections.append({"spec": str(spec), "json": out, "metrics": m, "tp": tp})
-    ref_metrics = dental.metrics(against, thickness, **kw) if against else None
+    ref_metrics = _spectra(against, thickness, instrument, kw) if against else None
+    geometry = []
+    for s in sections:
+        g = _geometry(s["json"])
+        if g not in geometry:
+            geometry.append(g)
+    where = " / ".join(g["short"] for g in geometry)
 
     pages = []
     for s in sections:
@@ -195,8 +252,11 @@ def build(materials, thickness: float, against=None, instrument=None, tp_thickne
                        "delta_tp00": _cell("delta_tp00", out.get("delta_tp00"),
                                            DIGITS["delta_tp00"]),
                        "translucency_verdict": dental.translucency_verdict(out["delta_tp00"])
-                       if isinstance(out.get("delta_tp00"), float) else "—"}
-        shown = {k for k, _ in LAB_ROWS + SCALAR_ROWS} | set(COMPARE_KEYS) | set(SECTION_KEYS)
+                       if isinstance(out.get("delta_tp00"), float) else "—",
+                       "stderr": _cell("delta_e00_stderr", out["delta_e00_stderr"],
+                                       DIGITS["delta_e00"])
+                       if "delta_e00_stderr" in out else None}
+        shown = {k for k, _ in LAB_ROWS + SCALAR_ROWS} | set(COMPARE_SHOWN) | set(SECTION_KEYS)
         pages.append({
             "spec": s["spec"], "name": mats[s["spec"]].name,
             "lab": lab, "scalars": scalars, "compare": compare,
@@ -206,10 +266,10 @@ def build(materials, thickness: float, against=None, instrument=None, tp_thickne
             "json_text": json.dumps(out, indent=1),
         })
     inputs = {"materials": ", ".join(map(str, materials)), "thickness [mm]": f"{thickness:g}",
-              "against": against or "—", "instrument": instrument or "— (infinite geometry)",
-              **{k: ("air gap" if k == "contact" and v is None else
-                     ", ".join(f"{x:g}" for x in v) if isinstance(v, list | tuple | np.ndarray)
-                     else str(v)) for k, v in kw.items() if k != "progress"},
+              "against": against or "—", "instrument": instrument or (
+                  "— (the default of dentalux shade)" if has_instruments() else
+                  "— (infinite geometry)"), "match": match or "—",
+              **{k: _input_text(k, v) for k, v in kw.items() if k != "progress"},
               "TP chart thicknesses [mm]": ", ".join(f"{t:g}" for t in ts)}
     labelled = [(mats[s["spec"]].name, s["metrics"]) for s in sections]
     if ref_metrics is not None:
@@ -222,16 +282,13 @@ def build(materials, thickness: float, against=None, instrument=None, tp_thickne
         "command": command,
         "seed": kw.get("seed", 1),
         "thickness": float(thickness), "against": against,
-        "instrument": instrument,
-        "geometry": None if any("instrument" in s["json"] for s in sections) else
-        "infinite geometry: a laterally infinite disc on an ideal Lambertian backing, normal "
-        "illumination, all reflected light collected (SCI); no instrument aperture or edge loss",
+        "geometry": geometry,
         "pt": dental.PT, "at": dental.AT, "tpt": dental.TPT, "tat": dental.TAT,
         "inputs": inputs, "pages": pages,
-        "charts": [charts.spectra(labelled),
+        "charts": [charts.spectra(labelled, where),
                    charts.optics([(m.name, m) for m in mats.values()]),
                    charts.tp_thickness([(mats[s["spec"]].name, s["tp"]) for s in sections],
-                                       float(thickness), instrument)],
+                                       float(thickness), where)],
         "provenance": [{"spec": k, **_provenance(m)} for k, m in mats.items()],
         "figure": figure,
     }

@@ -1,7 +1,7 @@
 """The report's charts (matplotlib, headless), each returned as a base64 PNG data URI.
 
 - :func:`spectra`: reflectance over the black and white backings and total transmittance of
-  each disc, per band (from :func:`dentalux.dental.metrics`, infinite geometry);
+  each disc, per band (from :func:`dentalux.dental.metrics`, read as ``shade`` reads it);
 - :func:`optics`: μa and μs′ of each material against wavelength (the library's
   interpolation, :meth:`dentalux.materials.Material.at`; dots at the known wavelengths);
 - :func:`tp_thickness`: TP00 and TP of each material against disc thickness.
@@ -33,9 +33,9 @@ def _uri(fig) -> dict:
     return {"src": src, "width": w, "height": h}
 
 
-def spectra(labelled) -> dict:
+def spectra(labelled, where: str) -> dict:
     """Reflectance (over black, over white) and transmittance against wavelength, for each
-    ``(label, DentalMetrics)``."""
+    ``(label, DentalMetrics)``, read in ``where`` (the geometry's short name)."""
     fig, (ax_r, ax_t) = plt.subplots(1, 2, figsize=(9.0, 4.0), layout="constrained")
     for i, (label, m) in enumerate(labelled):
         wl, sp, c = np.asarray(m.wavelengths_nm), m.spectra, f"C{i}"
@@ -43,13 +43,13 @@ def spectra(labelled) -> dict:
         ax_r.plot(wl, sp["over_white"], "s--", color=c, ms=3, lw=1.2, label=f"{label}, white")
         ax_t.plot(wl, sp["transmitted"], "o-", color=c, ms=3, lw=1.2)
     ax_r.set(title="Reflectance over the backings", xlabel="wavelength [nm]", ylabel="R")
-    ax_t.set(title="Total transmittance (disc in air)", xlabel="wavelength [nm]", ylabel="T")
+    ax_t.set(title="Transmittance (disc in air)", xlabel="wavelength [nm]", ylabel="T")
     for ax in (ax_r, ax_t):
         ax.grid(alpha=0.3)
     fig.legend(*ax_r.get_legend_handles_labels(), loc="outside lower center", fontsize=7,
                ncol=min(4, 2 * len(labelled)))
     return {"id": "spectra", "caption": "Reflectance over the black (solid) and white "
-            "(dashed) backings and total transmittance per band (infinite geometry).", **_uri(fig)}
+            f"(dashed) backings and transmittance per band ({where}).", **_uri(fig)}
 
 
 def optics(materials) -> dict:
@@ -73,7 +73,7 @@ def optics(materials) -> dict:
             "interpolation; dots: the material's known wavelengths).", **_uri(fig)}
 
 
-def tp_thickness(series, thickness: float, instrument=None) -> dict:
+def tp_thickness(series, thickness: float, where: str) -> dict:
     """TP00 (solid) and TP (dashed) against thickness for each ``(label, [(t, tp, tp00)])``;
     the report's thickness is marked."""
     fig, ax = plt.subplots(figsize=(6.0, 3.6), layout="constrained")
@@ -82,7 +82,6 @@ def tp_thickness(series, thickness: float, instrument=None) -> dict:
         ax.plot(t, tp00, "o-", color=f"C{i}", ms=4, label=f"{label}, TP00")
         ax.plot(t, tp, "s--", color=f"C{i}", ms=3, alpha=0.7, label=f"{label}, TP")
     ax.axvline(thickness, color="0.5", lw=0.8, ls=":")
-    where = f"instrument {instrument}" if instrument else "infinite geometry"
     ax.set(title=f"Translucency against thickness ({where})", xlabel="thickness [mm]",
            ylabel="TP00, TP")
     ax.grid(alpha=0.3)
