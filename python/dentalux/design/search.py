@@ -1,0 +1,286 @@
+"""``dentalux.design.optimise``: which thickness of each layer matches a target tooth.
+
+1. The fast model (:mod:`dentalux.design.forward`) reads the specimen by Monte Carlo at the
+   nodes of a thickness grid and interpolates between them.
+2. The search evaluates it on a dense grid (``step``, 0.01 mm by default for one or two
+   layers: finer than a technician can hold) inside the layer ranges and the total range and
+   ranks the points by the objective ΔE00 to the target colour over the white backing, plus
+   |TP00 - target TP00| when a translucency target is given (both are ΔE00 units). The best
+   points at least ``spacing`` apart (0.1 mm, Chebyshev distance) are the candidate designs.
+3. Each design is read by the full Monte Carlo :func:`dentalux.dental.read` through the
+   instrument with an independent seed (:mod:`dentalux.design.verify`); its reported numbers
+   are the Monte Carlo's, ``verified`` says whether the fast model agreed within 4 standard
+   errors.
+4. Sensitivity: for each layer, ΔE00 between the design's colour and the colour with that
+   layer 0.1 mm thicker or thinner (the larger of the two; one-sided at a range limit), from
+   the fast model: how far a technician's ±0.1 mm moves the shade.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dentalux import dental
+from dentalux import instrument as instruments
+from dentalux.color import delta_e00
+from dentalux.design import constraints, substrates, targets, verify
+from dentalux.design.forward import ColourMap, Surface, check_data
+from dentalux.spectra import resolve_bands
+
+DEFAULT_PHOTONS = 10_000
+TOLERANCE_MM = 0.1  # what a technician can hold: the sensitivity step and design spacing
+MAX_DENSE_POINTS = 300_000
+
+
+@dataclass
+class DesignResult:
+    """The ranked designs and what produced them (``to_json`` is the CLI's object)."""
+
+    target: targets.Target
+    designs: list[dict]
+    instrument: dict
+    seconds: float
+    search_seconds: float
+    verify_seconds: float
+    substrate: str
+    layers: list[dict]
+    photons: int
+    plane: dict | None = None
+    surface: Surface | None = field(default=None, repr=False)
+
+    def to_json(self) -> dict:
+        return {"target": self.target.to_json(), "designs": self.designs,
+                "instrument": self.instrument, "seconds": self.seconds}
+
+
+def _axes(ranges, step: float) -> list[np.ndarray]:
+    out = []
+    for lo, hi in ranges:
+        n = max(2, int(math.floor((hi - lo) / step + 1e-9)) + 1)
+        ax = lo + step * np.arange(n)
+        if hi - ax[-1] > 1e-9:
+            ax = np.append(ax, hi)
+        out.append(np.round(ax, 6))
+    return out
+
+
+def _pick(order, points, spacing: float, n: int) -> list[int]:
+    """Greedy: the best points at least ``spacing`` apart (Chebyshev)."""
+    chosen: list[int] = []
+    for i in order:
+        if all(np.max(np.abs(points[i] - points[j])) >= spacing - 1e-9 for j in chosen):
+            chosen.append(int(i))
+            if len(chosen) == n:
+                break
+    return chosen
+
+
+def _sensitivity(surface: Surface, point: np.ndarray) -> list[float]:
+    """ΔE00 per 0.1 mm for each layer (module doc, item 4)."""
+    base = surface.metrics(surface.readings(point[None, :])[0])["lab_white"][0]
+    out = []
+    for d, (lo, hi) in enumerate(surface.ranges):
+        worst = 0.0
+        for sign in (1.0, -1.0):
+            p = point.copy()
+            p[d] = min(hi, max(lo, p[d] + sign * TOLERANCE_MM))
+            h = abs(p[d] - point[d])
+            if h < 1e-9:
+                continue
+            lab = surface.metrics(surface.readings(p[None, :])[0])["lab_white"][0]
+            worst = max(worst, float(delta_e00(lab, base)) * TOLERANCE_MM / h)
+        out.append(worst)
+    return out
+
+
+def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
+             instrument=instruments.DEFAULT, bands="full", target_tp: float | None = None,
+             photons: int = DEFAULT_PHOTONS, verify_photons: int | None = None, seed: int = 1,
+             designs: int = 3, nodes: int | None = None, step: float | None = None,
+             spacing: float = TOLERANCE_MM, check: bool = True, illuminant: str = "D65",
+             observer: str = "2", reconstruction: str = "hold", estimator: str = "weighted",
+             threads: int | None = None, progress: bool | None = False) -> DesignResult:
+    """Search layer thicknesses that match ``target`` read through ``instrument``.
+
+    ``target``: ``lab:L,a,b``, ``GUIDE:TAB`` (data/shade_guides.csv), ``stack:MAT:MM/...``,
+    an (L, a, b) triple or a :class:`dentalux.design.targets.Target`; ``target_tp`` adds a
+    TP00 target. ``layers``: 1 to 3 of (material, (min, max) [mm]) or ``MATERIAL:MIN-MAX``,
+    top to bottom. ``total``: (min, max) [mm] of the restoration (cement excluded) or None.
+    ``substrate``, ``cement``: :mod:`dentalux.design.substrates`. ``photons`` per band and
+    run for the fast model's nodes, ``verify_photons`` (default the same) for the Monte Carlo
+    verification; ``designs``: how many to return; ``nodes`` per layer (default 6, 4, 3 for
+    1, 2, 3 layers); ``step`` of the dense search grid [mm]; ``check=False`` skips the
+    verification (the numbers are then the fast model's and ``verified`` is false).
+    """
+    start = time.perf_counter()
+    spec = constraints.check_layers(layers)
+    ranges = [r for _, r in spec]
+    total = constraints.check_total(total, ranges)
+    substrate = substrates.check(substrate)
+    inst_plain = instruments.get(instrument)
+    inst = inst_plain.override(**substrates.backings(substrate))
+    wl = resolve_bands(bands)
+    for name, value in (("photons", photons), ("designs", designs)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{name} = {value!r} is out of range: allowed an integer >= 1")
+    verify_photons = photons if verify_photons is None else verify_photons
+    if isinstance(verify_photons, bool) or not isinstance(verify_photons, int) \
+            or verify_photons < 1:
+        raise ValueError(f"verify_photons = {verify_photons!r} is out of range: allowed an "
+                         "integer >= 1")
+    if not (isinstance(spacing, (int, float)) and 0 <= spacing < 10):
+        raise ValueError(f"spacing = {spacing!r} is out of range: allowed [0, 10) mm")
+    if step is not None and not (isinstance(step, (int, float)) and 0 < step <= 1):
+        raise ValueError(f"step = {step!r} is out of range: allowed (0, 1] mm")
+    parts = []
+    for i, (material, _) in enumerate(spec):
+        m = dental._resolve_material(material)
+        check_data(m, wl, f"layer[{i}] material")
+        parts.append(m)
+    tail = []
+    if cement is not None:
+        if isinstance(cement, str):
+            mat, sep, mm = cement.rpartition(":")
+            try:
+                cement = (mat, float(mm))
+            except ValueError:
+                sep = ""
+            if not sep or not mat:
+                raise ValueError(f"cement = {cement!r}: expected MATERIAL:MM")
+        try:
+            mat, mm = cement
+            mm = float(mm)
+        except (TypeError, ValueError):
+            raise ValueError(f"cement = {cement!r}: expected (material, thickness [mm])") from None
+        if not (math.isfinite(mm) and 0 < mm <= constraints.MAX_MM):
+            raise ValueError(f"cement thickness = {mm!r} is out of range: allowed "
+                             f"(0, {constraints.MAX_MM:g}] mm")
+        cm = dental._resolve_material(mat)
+        check_data(cm, wl, "cement material")
+        tail.append((cm, mm))
+        cement = (cm, mm)
+    for m, t in substrates.layers(substrate):
+        tail.append((dental._resolve_material(m), t))
+    rb_black = dental.backing_spectrum(inst.backing_black, wl, "backing_black")
+    rb_white = dental.backing_spectrum(inst.backing_white, wl, "backing_white")
+    common = dict(bands=wl, illuminant=illuminant, observer=observer,
+                  reconstruction=reconstruction, estimator=estimator, threads=threads)
+
+    def read_stack(stack):
+        return dental.read(stack, instrument=inst_plain, photons=verify_photons,
+                           seed=seed + 2, **common)
+
+    tgt = targets.parse(target, target_tp, read=read_stack)
+    tp = tgt.tp00 is not None
+
+    colour = ColourMap(wl, illuminant, observer, reconstruction)
+    surface = Surface(parts, ranges, tail, inst, wl, rb_white, rb_black, colour, photons,
+                      seed, black=tp, nodes=nodes, estimator=estimator, threads=threads,
+                      progress=progress)
+
+    # dense search
+    k = len(parts)
+    if step is None:
+        step = 0.01 if k <= 2 else 0.025
+    axes = _axes(ranges, float(step))
+    while np.prod([len(a) for a in axes]) > MAX_DENSE_POINTS:
+        step *= 1.5
+        axes = _axes(ranges, step)
+    m = surface.metrics(surface.grid(axes))
+    de = np.asarray(delta_e00(m["lab_white"], np.asarray(tgt.lab)))
+    objective = de + (np.abs(m["tp00"] - tgt.tp00) if tp else 0.0)
+    mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+    feasible = np.ones(de.shape, dtype=bool)
+    if total is not None:
+        s = mesh.sum(axis=-1)
+        feasible = (s >= total[0] - 1e-9) & (s <= total[1] + 1e-9)
+    if not feasible.any():
+        raise ValueError(f"total = {total[0]:g}-{total[1]:g} mm: no point of the search grid "
+                         f"(step {step:g} mm) meets it; widen the total or the layer ranges")
+    flat_obj = np.where(feasible, objective, np.inf).ravel()
+    points = mesh.reshape(-1, k)
+    order = np.argsort(flat_obj, kind="stable")
+    order = order[np.isfinite(flat_obj[order])]
+    chosen = _pick(order, points, float(spacing), int(designs))
+    plane = None
+    if k == 2:
+        plane = {"axes": [a.tolist() for a in axes], "delta_e00": de, "feasible": feasible,
+                 "objective": objective}
+    search_seconds = time.perf_counter() - start
+
+    out = []
+    verify_seconds = 0.0
+    names = [str(getattr(p, "name", "material")) for p in parts]
+    for i in chosen:
+        point = points[i].astype(float)
+        thick = [round(float(x), 4) for x in point]
+        fast = surface.at(point, tgt.lab)
+        fast_de_err = verify.delta_e_stderr(fast["values"]["lab_white"],
+                                            fast["stderr"]["lab_white"], tgt.lab, tgt.lab_stderr)
+        fast_json = {"lab": fast["values"]["lab_white"], "lab_stderr": fast["stderr"]["lab_white"],
+                     "delta_e00": fast["values"]["delta_e00"], "delta_e00_stderr": fast_de_err}
+        if tp:
+            fast_json.update(tp00=fast["values"]["tp00"], tp00_stderr=fast["stderr"]["tp00"])
+        design = {"thickness_mm": thick, "materials": names,
+                  "sensitivity": _sensitivity(surface, point)}
+        if check:
+            t0 = time.perf_counter()
+            specimen = substrates.specimen(list(zip(parts, thick, strict=True)), substrate, cement)
+            mc = dental.read(specimen, instrument=inst, photons=verify_photons, seed=seed + 1,
+                             **common)
+            seconds = time.perf_counter() - t0
+            verify_seconds += seconds
+            cmp = verify.compare(fast, mc, tp)
+            lab = mc.lab_white
+            lab_err = [mc.stderr[f"lab_white.{c}"] for c in "Lab"]
+            de_mc = float(delta_e00(np.asarray(lab), np.asarray(tgt.lab)))
+            de_err = verify.delta_e_stderr(lab, lab_err, tgt.lab, tgt.lab_stderr)
+            note = ("the fast model agrees with the Monte Carlo read within "
+                    f"{verify.SIGMAS:g} standard errors (max |z| = {cmp['max_abs_z']:.2f})"
+                    if cmp["verified"] else
+                    f"NOT VERIFIED: the fast model and the Monte Carlo read differ by max |z| "
+                    f"= {cmp['max_abs_z']:.2f} > {verify.SIGMAS:g} standard errors; the "
+                    "numbers reported are the Monte Carlo's")
+            design.update(lab=lab, lab_stderr=lab_err, delta_e00=de_mc, delta_e00_stderr=de_err,
+                          verdict=dental.verdict(de_mc), verified=cmp["verified"])
+            if tp:
+                dtp = abs(mc.tp00 - tgt.tp00)
+                design.update(tp00=mc.tp00, tp00_stderr=mc.stderr["tp00"], delta_tp00=dtp,
+                              delta_tp00_stderr=math.hypot(mc.stderr["tp00"], tgt.tp00_stderr),
+                              translucency_verdict=dental.translucency_verdict(dtp))
+            design["verification"] = {
+                "method": "dentalux.dental.read through the instrument, independent seed",
+                "photons_per_band_and_run": verify_photons, "seed": seed + 1,
+                "sigmas": verify.SIGMAS, "z": cmp["z"], "max_abs_z": cmp["max_abs_z"],
+                "delta_e00_fast_vs_mc": cmp["delta_e00_fast_vs_mc"], "seconds": seconds,
+                "note": note}
+        else:
+            de_f = fast["values"]["delta_e00"]
+            design.update(lab=fast["values"]["lab_white"], lab_stderr=fast["stderr"]["lab_white"],
+                          delta_e00=de_f, delta_e00_stderr=fast_de_err,
+                          verdict=dental.verdict(de_f), verified=False)
+            if tp:
+                dtp = abs(fast["values"]["tp00"] - tgt.tp00)
+                design.update(tp00=fast["values"]["tp00"], tp00_stderr=fast["stderr"]["tp00"],
+                              delta_tp00=dtp, delta_tp00_stderr=fast["stderr"]["tp00"],
+                              translucency_verdict=dental.translucency_verdict(dtp))
+            design["verification"] = {"note": "not verified (check=False): the numbers are "
+                                              "the fast model's"}
+        design["fast_model"] = fast_json
+        out.append(design)
+
+    def rank(d):
+        return d["delta_e00"] + (d.get("delta_tp00", 0.0) if tp else 0.0)
+
+    out.sort(key=lambda d: (not d["verified"], rank(d)) if check else rank(d))
+    seconds = time.perf_counter() - start
+    inst_json = inst.to_json()
+    return DesignResult(
+        target=tgt, designs=out, instrument=inst_json, seconds=seconds,
+        search_seconds=search_seconds, verify_seconds=verify_seconds, substrate=substrate,
+        layers=[{"material": n, "range_mm": list(r)} for n, r in zip(names, ranges, strict=True)],
+        photons=surface.photons, plane=plane, surface=surface)

@@ -1,0 +1,136 @@
+"""What a design is matched to: a CIELAB colour (and optionally a TP00), with its source.
+
+Target strings (``dentalux design --target``):
+
+- ``lab:L,a,b`` — explicit CIELAB values (a measured tooth, a tab the user measured);
+- ``GUIDE:TAB`` — a tab of a shade guide in ``data/shade_guides.csv``
+  (``vita-classical:A2``, ``vita-3d-master:2M2``); refused, naming the tab, when the table
+  holds no published values for it (:func:`dentalux.shade_guides.lab`);
+- ``stack:MATERIAL:MM[/MATERIAL:MM...]`` — a tooth region given as a layered specimen (top
+  to bottom, e.g. ``stack:enamel:1.0/dentin:2.5``), read by the Monte Carlo slab through
+  the design's instrument: its colour over the white backing becomes the target.
+
+``tp`` adds a translucency target (TP00, ΔE00 between the readings over black and white).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+L_RANGE = (0.0, 100.0)
+AB_RANGE = (-128.0, 127.0)  # the 8-bit CIELAB encoding's range, wider than any object colour
+TP_RANGE = (0.0, 100.0)
+
+
+@dataclass(frozen=True)
+class Target:
+    """A CIELAB target (over the instrument's white backing) and an optional TP00 target."""
+
+    lab: tuple[float, float, float]
+    tp00: float | None = None
+    source: dict = field(default_factory=dict, compare=False)
+    lab_stderr: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    tp00_stderr: float = 0.0
+
+    def to_json(self) -> dict:
+        out = {"lab": list(self.lab), "source": self.source}
+        if any(self.lab_stderr):
+            out["lab_stderr"] = list(self.lab_stderr)
+        if self.tp00 is not None:
+            out["tp00"] = self.tp00
+            if self.tp00_stderr:
+                out["tp00_stderr"] = self.tp00_stderr
+        return out
+
+
+def check_lab(lab, name: str = "target") -> tuple[float, float, float]:
+    """Three finite numbers inside the CIELAB range, or a ValueError naming the component."""
+    try:
+        values = [float(x) for x in lab]
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} = {lab!r}: expected three numbers L*, a*, b*") from None
+    if len(values) != 3:
+        raise ValueError(f"{name} = {lab!r}: expected three numbers L*, a*, b*, got "
+                         f"{len(values)}")
+    for comp, x, (lo, hi) in zip(("L*", "a*", "b*"), values, (L_RANGE, AB_RANGE, AB_RANGE),
+                                 strict=True):
+        if not math.isfinite(x) or not lo <= x <= hi:
+            raise ValueError(f"{name} {comp} = {x:g} is outside the CIELAB range: allowed "
+                             f"[{lo:g}, {hi:g}]")
+    return tuple(values)
+
+
+def check_tp(tp, name: str = "target_tp") -> float | None:
+    if tp is None:
+        return None
+    try:
+        x = float(tp)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} = {tp!r}: expected a number (TP00)") from None
+    if isinstance(tp, bool) or not math.isfinite(x) or not TP_RANGE[0] <= x <= TP_RANGE[1]:
+        raise ValueError(f"{name} = {tp!r} is out of range: allowed [{TP_RANGE[0]:g}, "
+                         f"{TP_RANGE[1]:g}] (TP00, a ΔE00)")
+    return x
+
+
+def parse_stack(text: str) -> list[tuple[str, float]]:
+    """``MATERIAL:MM[/MATERIAL:MM...]`` -> [(material, thickness)], top to bottom."""
+    out = []
+    for i, part in enumerate(p for p in text.split("/") if p.strip()):
+        material, sep, mm = part.strip().rpartition(":")
+        try:
+            t = float(mm)
+        except ValueError:
+            t = math.nan
+        if not sep or not material or not (math.isfinite(t) and t > 0):
+            raise ValueError(f"target stack layer {i} = {part!r}: expected MATERIAL:MM with "
+                             "a thickness > 0 [mm]")
+        out.append((material, t))
+    if not out:
+        raise ValueError(f"target = 'stack:{text}': give at least one MATERIAL:MM layer")
+    return out
+
+
+def parse(target, tp=None, read=None) -> Target:
+    """A :class:`Target` from a target string, an (L, a, b) triple or a Target.
+
+    ``read(stack) -> DentalMetrics`` reads a ``stack:`` target through the design's
+    instrument (given by :func:`dentalux.design.optimise`)."""
+    tp = check_tp(tp)
+    if isinstance(target, Target):
+        return Target(check_lab(target.lab), tp if tp is not None else target.tp00,
+                      target.source, target.lab_stderr, target.tp00_stderr)
+    if not isinstance(target, str):
+        return Target(check_lab(target), tp, {"kind": "lab", "status": "given"})
+    text = target.strip()
+    kind, sep, rest = text.partition(":")
+    if not sep or not rest:
+        raise ValueError(f"target = {target!r}: expected lab:L,a,b, GUIDE:TAB (e.g. "
+                         "vita-classical:A2) or stack:MATERIAL:MM[/MATERIAL:MM...]")
+    if kind == "lab":
+        parts = [p for p in rest.split(",")]
+        try:
+            values = [float(p) for p in parts]
+        except ValueError:
+            raise ValueError(f"target = {target!r}: lab:L,a,b needs three numbers") from None
+        return Target(check_lab(values, "target"), tp, {"kind": "lab", "status": "given"})
+    if kind == "stack":
+        stack = parse_stack(rest)
+        if read is None:
+            raise ValueError("target stack: needs an instrument to read it")
+        m = read(stack)
+        lab = check_lab(m.lab_white, "target (read stack)")
+        source = {"kind": "stack", "status": "derived",
+                  "stack": [{"material": str(mat), "thickness_mm": t} for mat, t in stack],
+                  "tp00_read": m.tp00, "tp00_read_stderr": m.stderr["tp00"],
+                  "notes": "read by the Monte Carlo slab through the design's instrument, "
+                           "colour over its white backing; its TP00 is in tp00_read (a TP "
+                           "target only when --target-tp is given)"}
+        return Target(lab, tp, source, tuple(m.stderr[f"lab_white.{c}"] for c in "Lab"))
+    from dentalux import shade_guides
+
+    guide, tab = kind, rest
+    row = shade_guides.tab(guide, tab)  # unknown guide or tab: ValueError naming the allowed
+    lab = check_lab(shade_guides.lab(guide, tab), f"target {guide}:{tab}")
+    return Target(lab, tp, {"kind": "shade-guide", **row.source()})

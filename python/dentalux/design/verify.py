@@ -1,0 +1,49 @@
+"""Verification of a design by the full Monte Carlo read through the instrument.
+
+The design's specimen is read by :func:`dentalux.dental.read` (the same forward model as
+``dentalux shade --layer``), with a different seed from the search's response surface, so
+the two are independent estimates. A design is ``verified`` when every compared number
+(L*, a*, b* over the white backing, and TP00 where a TP target is given) agrees with the
+fast model within ``SIGMAS`` combined standard errors, sqrt(s_fast^2 + s_mc^2).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from dentalux import dental
+from dentalux.color import delta_e00
+
+SIGMAS = 4.0
+
+
+def delta_e_stderr(lab, lab_err, target, target_err=(0.0, 0.0, 0.0)) -> float:
+    """First-order standard error of ΔE00(lab, target) from both colours' L*, a*, b* errors."""
+    lab, target = np.asarray(lab, float), np.asarray(target, float)
+    de = float(delta_e00(lab, target))
+    var = 0.0
+    for j in range(3):
+        step = np.zeros(3)
+        step[j] = 1e-4
+        d1 = (float(delta_e00(lab + step, target)) - de) / 1e-4
+        d2 = (float(delta_e00(lab, target + step)) - de) / 1e-4
+        var += (d1 * lab_err[j]) ** 2 + (d2 * target_err[j]) ** 2
+    return math.sqrt(var)
+
+
+def compare(fast: dict, mc: dental.DentalMetrics, tp: bool) -> dict:
+    """z-scores of the fast model against the Monte Carlo read, and the verdict."""
+    keys = [("L", 0), ("a", 1), ("b", 2)]
+    z = {}
+    for c, j in keys:
+        s = math.hypot(fast["stderr"]["lab_white"][j], mc.stderr[f"lab_white.{c}"])
+        z[f"lab_white.{c}"] = (fast["values"]["lab_white"][j] - mc.lab_white[j]) / s if s else 0.0
+    if tp:
+        s = math.hypot(fast["stderr"]["tp00"], mc.stderr["tp00"])
+        z["tp00"] = (fast["values"]["tp00"] - mc.tp00) / s if s else 0.0
+    worst = max(abs(v) for v in z.values())
+    return {"z": z, "max_abs_z": worst, "verified": bool(worst <= SIGMAS),
+            "delta_e00_fast_vs_mc": float(delta_e00(np.asarray(fast["values"]["lab_white"]),
+                                                    np.asarray(mc.lab_white)))}
