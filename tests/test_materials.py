@@ -22,11 +22,20 @@ def test_library_has_the_required_entries_and_documented_defaults():
     names = M.names()
     for name in REQUIRED:
         assert name in names
-    assert M.get("enamel").name == "enamel@zoller2018-kienle"
-    assert M.get("dentin").name == "dentin@zoller2018-kienle"
+    assert M.get("enamel").name == "enamel@fitted-yu2009"
+    assert M.get("dentin").name == "dentin@fitted-yu2009"
     assert M.get("enamel", variant="fried1995-transcribed") is M.get("enamel@fried1995-transcribed")
-    assert M.variants("enamel") == ["enamel@fried1995-transcribed", "enamel@zijp1995",
-                                    "enamel@zoller2018-kienle"]
+    assert M.variants("enamel") == ["enamel@fitted-yu2009", "enamel@fried1995-transcribed",
+                                    "enamel@zijp1995", "enamel@zoller2018-kienle"]
+
+
+def test_fitted_tissues_scale_only_the_scattering_of_their_source():
+    for tissue, factor in (("enamel", 20.0), ("dentin", 1.8)):
+        fit, src = M.get(f"{tissue}@fitted-yu2009"), M.get(f"{tissue}@zoller2018-kienle")
+        np.testing.assert_allclose(fit.mus, factor * src.mus)
+        for q in ("mua", "g", "fd", "n", "wavelength_nm"):
+            np.testing.assert_array_equal(getattr(fit, q), getattr(src, q))
+        assert fit.value_provenance("mus").startswith("fitted")
 
 
 def test_transcribed_values_match_the_reference_table():
@@ -48,12 +57,12 @@ def test_transcribed_values_match_the_reference_table():
 
 
 def test_power_law_between_known_points():
-    m = M.get("enamel")  # mus 0.8 -> 0.2 and mua 0.06 -> 0.02 over 400 -> 700 nm
+    m = M.get("enamel@zoller2018-kienle")  # mus 0.8 -> 0.2, mua 0.06 -> 0.02 (400 -> 700 nm)
     lam = math.sqrt(400 * 700)  # a power law gives the geometric mean here
     o = m.at(lam)
     assert o.mus == pytest.approx(math.sqrt(0.8 * 0.2), rel=1e-12)
     assert o.mua == pytest.approx(math.sqrt(0.06 * 0.02), rel=1e-12)
-    d = M.get("dentin").at(550)  # g linear: 0.93 + (0.964 - 0.93) * 150/300
+    d = M.get("dentin@zoller2018-kienle").at(550)  # g linear: 0.93 + (0.964 - 0.93) * 150/300
     assert d.g == pytest.approx(0.947, rel=1e-12)
     # log-log linear: the slope between any two interior points is the exponent b
     b = math.log(0.2 / 0.8) / math.log(700 / 400)
@@ -109,7 +118,7 @@ def test_every_value_has_provenance():
 
 
 def test_scaling_is_explicit_and_recorded():
-    m = M.get("enamel")
+    m = M.get("enamel@zoller2018-kienle")
     s = m.scaled(mus_factor=20.0, mua_factor=2.0, g=0.5, note="limited photon budget")
     assert s.name == "enamel@zoller2018-kienle+scaled" and s.is_scaled and not m.is_scaled
     np.testing.assert_allclose(s.mus, 20.0 * m.mus)
@@ -267,7 +276,7 @@ def test_cli_list_show_plot(tmp_path, capsys):
     assert {r["name"] for r in listed} >= set(REQUIRED)
     assert _cli(["materials", "show", "enamel", "--json", "-w", "550"]) == 0
     shown = json.loads(capsys.readouterr().out)
-    assert shown["name"] == "enamel@zoller2018-kienle"
+    assert shown["name"] == "enamel@fitted-yu2009"
     assert shown["evaluated"]["mus"][0] == pytest.approx(M.get("enamel").at(550).mus)
     out = tmp_path / "enamel.png"
     assert _cli(["materials", "plot", "dentin@fried1995-transcribed", "--out", str(out)]) == 0

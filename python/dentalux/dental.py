@@ -369,6 +369,42 @@ def metrics(material, thickness: float, bands="full", backing_black=None, backin
                 threads=threads, progress=progress)
 
 
+MATCH_BACKING = "white"  # shade tabs are matched to the reading over the white backing
+
+
+def shade(material, thickness: float = 1.0, against=None, instrument=None, match=None,
+          specimen=None, **kw) -> dict:
+    """The object ``dentalux shade --json`` prints: :meth:`DentalMetrics.to_json` (with
+    ``instrument`` and ``edge_loss``), ΔE00/ΔTP00 and verdict against ``against``, and the
+    nearest tabs of the shade guide ``match`` as ``shade_match``.
+
+    ``instrument`` None is the command's default, :data:`dentalux.instrument.DEFAULT`.
+    ``specimen``: a layered specimen [(material, thickness), ...] read instead of
+    ``material`` at ``thickness`` (then ``against`` is read at the specimen's total
+    thickness). ``kw``: the keyword arguments of :func:`read`.
+    """
+    inst = instruments.get(instruments.DEFAULT if instrument is None else instrument)
+    kw.setdefault("progress", False)
+    layers = specimen if specimen is not None else [(material, thickness)]
+    m = read(layers, instrument=inst, **kw)
+    out = m.to_json()
+    if specimen is not None:
+        out["layers"] = m.layers
+    if against:
+        ref = read([(against, m.thickness)], instrument=inst, **kw)
+        cmp = compare(m, ref)
+        out.update({k: cmp[k] for k in ("delta_e00", "delta_tp00", "verdict")})
+        out["delta_e00_stderr"] = cmp["delta_e00_stderr"]
+    if match:
+        from dentalux import shade_guides
+
+        lab = getattr(m, f"lab_{MATCH_BACKING}")
+        out["shade_match"] = [{"tab": tab, "delta_e00": float(de)}
+                              for tab, de in shade_guides.nearest(lab, match)]
+        out["shade_match_over"] = MATCH_BACKING
+    return out
+
+
 def verdict(delta_e: float) -> str:
     """ΔE00 against the 50:50 % thresholds: imperceptible (< 0.8), acceptable (<= 1.8),
     unacceptable."""

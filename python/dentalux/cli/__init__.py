@@ -10,6 +10,7 @@ import typer
 from dentalux.cli import demo, slab
 from dentalux.cli import figures as figures_cli
 from dentalux.cli import fit as fit_cli
+from dentalux.cli import instruments as instruments_cli
 from dentalux.cli import materials as materials_cli
 from dentalux.cli import plot as plot_cli
 from dentalux.cli import render as render_cli
@@ -31,6 +32,7 @@ figures_cli.register(app)
 materials_cli.register(app)
 tooth_cli.register(app)
 shade_cli.register(app)
+instruments_cli.register(app)
 plot_cli.register(app)
 fit_cli.register(app)
 render_cli.register(app)

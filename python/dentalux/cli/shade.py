@@ -8,7 +8,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from dentalux import dental
+from dentalux import dental, instrument
 from dentalux.spectra import full_bands
 
 
@@ -26,16 +26,50 @@ def _bands(spec: str):
         raise ValueError(f"--bands = {spec!r}: 'full', 'paper' or comma-separated nm") from None
 
 
+def _parse_layers(specs: list[str]) -> list[tuple[str, float]]:
+    """``MATERIAL:THICKNESS`` items (top to bottom) -> [(material, thickness [mm])]."""
+    out = []
+    for i, spec in enumerate(specs):
+        name, sep, t = spec.rpartition(":")
+        try:
+            thickness = float(t) if sep else float("nan")
+        except ValueError:
+            thickness = float("nan")
+        if not name or not (thickness > 0) or thickness == float("inf"):
+            raise ValueError(f"--layer[{i}] = {spec!r}: expected MATERIAL:THICKNESS with a "
+                             "thickness > 0 [mm]")
+        out.append((name, thickness))
+    if len(out) > 3:
+        raise ValueError(f"--layer: {len(out)} layers given, allowed 1 to 3")
+    return out
+
+
 def shade_command(
-    material: str = typer.Argument(..., help="material name in the library, or a TOML file"),
+    material: str = typer.Argument(None, help="material name in the library, or a TOML file "
+                                   "(omit when --layer gives a layered specimen)"),
     thickness: float = typer.Option(1.0, help="disc thickness [mm]"),
     against: str = typer.Option(None, help="reference material (name or TOML) for ΔE00/ΔTP00"),
+    instrument_name: str = typer.Option(
+        instrument.DEFAULT, "--instrument",
+        help="instrument preset (`dentalux instruments list`), a TOML file, or 'infinite' "
+             "(a laterally infinite disc over infinite areas)"),
+    illuminated_diameter: float = typer.Option(None, help="override: lit spot diameter [mm]"),
+    viewed_diameter: float = typer.Option(None, help="override: viewed window diameter [mm]"),
+    geometry: str = typer.Option(None, help="override: " + "|".join(instrument.GEOMETRIES)),
     bands: str = typer.Option("full", help="'full' (380-780 nm/10 nm), 'full:STEP', 'paper' "
                               "or a comma-separated nm list"),
-    backing_black: float = typer.Option(0.0, help="black backing reflectance, in [0, 1]"),
-    backing_white: float = typer.Option(0.9, help="white backing reflectance, in [0, 1]"),
+    backing_black: float = typer.Option(None, help="black backing reflectance in [0, 1] "
+                                        "(default: the instrument's)"),
+    backing_white: float = typer.Option(None, help="white backing reflectance in [0, 1] "
+                                        "(default: the instrument's)"),
     contact: float = typer.Option(None, help="optical contact: coupling medium index (>= 1); "
-                                  "default an air gap"),
+                                  "default the instrument's (an air gap)"),
+    match: str = typer.Option(None, help="report the nearest tabs of a shade guide: "
+                              "vita-classical | vita-3d-master"),
+    layer: list[str] = typer.Option(None, help="MATERIAL:THICKNESS, repeated top to bottom: "
+                                    "a layered specimen instead of MATERIAL"),
+    substrate: str = typer.Option(None, help="substrate under the --layer stack "
+                                  "(see `dentalux design --help`)"),
     photons: int = typer.Option(dental.DEFAULT_PHOTONS, help="photons per band and run"),
     seed: int = typer.Option(1, help="random seed"),
     estimator: str = typer.Option("weighted", help="weighted | analog"),
@@ -44,41 +78,58 @@ def shade_command(
     threads: int = typer.Option(None, help="worker threads (default: all cores)"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
 ) -> None:
-    """CIELAB over black/white and in transmission, TP, TP00, CR, OP (and ΔE00 vs --against)."""
+    """CIELAB over black/white and in transmission, TP, TP00, CR, OP as an instrument reads
+    them (and ΔE00 vs --against, the nearest shade tabs with --match)."""
+    inst = instrument.get(instrument_name).override(
+        illuminated_diameter_mm=illuminated_diameter, viewed_diameter_mm=viewed_diameter,
+        geometry=geometry)
+    specimen = None
+    if layer:
+        if material is not None:
+            raise ValueError("give either MATERIAL or --layer, not both")
+        specimen = _parse_layers(layer)
+        if substrate is not None:
+            from dentalux import design
+
+            specimen = design.specimen(specimen, substrate)
+    elif material is None:
+        raise ValueError("MATERIAL: missing (or give --layer MATERIAL:THICKNESS)")
+    elif substrate is not None:
+        raise ValueError("--substrate goes with --layer")
     kw = dict(bands=_bands(bands), backing_black=backing_black, backing_white=backing_white,
               contact=contact, photons=photons, seed=seed, estimator=estimator,
               observer=observer, illuminant=illuminant, threads=threads,
               progress=False if as_json else None)
-    m = dental.metrics(material, thickness, **kw)
-    ref = dental.metrics(against, thickness, **kw) if against else None
-    cmp = dental.compare(m, ref) if ref else None
+    out = dental.shade(material, thickness, against=against, instrument=inst, match=match,
+                       specimen=specimen, **kw)
     if as_json:
-        out = m.to_json()
-        if cmp:
-            out.update({k: cmp[k] for k in ("delta_e00", "delta_tp00", "verdict")})
         print(json.dumps(out))
         return
-    table = Table(title=f"{m.material}, {m.thickness:g} mm, {illuminant}, {observer} deg")
+    m = out
+    ins = m["instrument"]
+    where = (f"{ins['name']}: {ins['geometry']}, lit {ins['illuminated_diameter_mm']} mm, "
+             f"viewed {ins['viewed_diameter_mm']} mm, specular {ins['specular']}")
+    title = (" / ".join(f"{n} {t:g} mm" for n, t in specimen) if specimen
+             else f"{material}, {thickness:g} mm")
+    table = Table(title=f"{title}, {illuminant}, {observer} deg, read by {where}")
     table.add_column("quantity")
     table.add_column("value", justify="right")
-    table.add_column("MC std. error", justify="right")
     for key, label in (("lab_black", "L*a*b* over black"), ("lab_white", "L*a*b* over white"),
                        ("lab_transmitted", "L*a*b* transmitted")):
-        v = getattr(m, key)
-        e = [m.stderr[f"{key}.{c}"] for c in "Lab"]
-        table.add_row(label, " ".join(f"{x:7.2f}" for x in v), " ".join(f"{x:.2f}" for x in e))
+        table.add_row(label, " ".join(f"{x:7.2f}" for x in m[key]))
     for key, label in (("tp", "TP (ΔE*ab)"), ("tp00", "TP00 (ΔE00)"), ("cr", "CR = Yb/Yw"),
                        ("op", "OP")):
-        table.add_row(label, f"{getattr(m, key):.4f}", f"{m.stderr[key]:.4f}")
-    if cmp:
-        table.add_row(f"ΔE00 vs {ref.material} (over white)", f"{cmp['delta_e00']:.3f}",
-                      f"{cmp['delta_e00_stderr']:.3f}")
-        table.add_row("  verdict", cmp["verdict"], f"PT {dental.PT}, AT {dental.AT}")
-        table.add_row("ΔTP00", f"{cmp['delta_tp00']:.3f}", f"{cmp['delta_tp00_stderr']:.3f}")
-        table.add_row("  translucency verdict", cmp["translucency_verdict"],
-                      f"TPT {dental.TPT}, TAT {dental.TAT}")
+        table.add_row(label, f"{m[key]:.4f}")
+    table.add_row("edge loss over black / white",
+                  f"{m['edge_loss']['black']:.4f} / {m['edge_loss']['white']:.4f}")
+    if against:
+        table.add_row(f"ΔE00 vs {against} (over white)",
+                      f"{m['delta_e00']:.3f} ± {m['delta_e00_stderr']:.3f}")
+        table.add_row("  verdict", f"{m['verdict']} (PT {dental.PT}, AT {dental.AT})")
+        table.add_row("ΔTP00", f"{m['delta_tp00']:.3f}")
+    for row in m.get("shade_match", [])[:3]:
+        table.add_row(f"{match} {row['tab']}", f"ΔE00 {row['delta_e00']:.2f}")
     Console().print(table)
-    Console().print(f"{m.photons} photons in {m.seconds:.1f} s")
 
 
 def register(app: typer.Typer) -> None:
