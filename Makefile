@@ -34,7 +34,7 @@ wheel: setup
 
 # The wheel installed into a throwaway venv and used from outside the checkout.
 wheel-test: wheel
-	tests/wheel_smoke.sh dist/dentalux-*.whl
+	PIP=$(abspath $(PIP)) tests/wheel_smoke.sh dist/dentalux-*.whl
 
 # Headless Chromium for the report's browser test (tests/test_report.py): Debian's package,
 # installed only when missing and only as root; without it that test skips, saying why.

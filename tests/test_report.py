@@ -145,11 +145,22 @@ def test_page_is_self_contained_and_complete(made):
         assert needle in text, needle
 
 
-def test_infinite_geometry_is_stated():
+def test_infinite_geometry_is_stated_and_a_figure_embedded(tmp_path):
+    from PIL import Image
+
+    png = tmp_path / "render.png"
+    Image.new("RGB", (8, 6), (200, 180, 150)).save(png)
     instrument = "infinite" if report.has_instruments() else None
     html = report.render_html(report.build("enamel", 1.0, instrument=instrument, bands="paper",
-                                           photons=300, tp_thicknesses=[1.0]))
+                                           photons=300, tp_thicknesses=[1.0], figure=png))
     assert 'id="infinite-geometry">infinite geometry: a laterally infinite disc' in html
+    assert html.count('<img src="data:image/png;base64,') == 4 and "render.png" in html
+    fake = tmp_path / "fake.png"
+    fake.write_text("not an image")
+    for bad, why in ((fake, "not a png"), (tmp_path / "r.gif", ".png or .jpg"),
+                     (tmp_path / "none.png", "not found")):
+        with pytest.raises((ValueError, FileNotFoundError), match=why):
+            report._figure(bad)
 
 
 def test_instrument_sections_are_rendered_from_the_json(monkeypatch, tmp_path):

@@ -5,7 +5,7 @@
 #   dentalux --version (must be pyproject.toml's version), every data file, scene and
 #   template of python/dentalux present in the install, a slab, a tiny render of the packaged
 #   discs scene, `dentalux shade --json` and a small `dentalux report`.
-# Usage: tests/wheel_smoke.sh dist/dentalux-VERSION-*.whl
+# Usage: [PIP=.venv/bin/pip] tests/wheel_smoke.sh dist/dentalux-VERSION-*.whl
 set -euo pipefail
 
 wheel=$(realpath "${1:?usage: tests/wheel_smoke.sh WHEEL}")
@@ -15,9 +15,20 @@ trap 'rm -rf "$work"' EXIT
 step() { printf 'wheel smoke [%3ds]: %s\n' "$SECONDS" "$*"; }
 
 step "installing $(basename "$wheel") into a fresh venv"
-python3 -m venv "$work/venv"
-# --no-compile: byte-compiling scipy, matplotlib and friends would double the install time
-"$work/venv/bin/pip" install --quiet --disable-pip-version-check --no-compile "$wheel"
+# The venv gets no pip of its own when PIP names one (pip >= 22.3 installs into it with
+# --python): nothing in it but the wheel and its dependencies, and no ensurepip to wait for.
+if [[ -n "${PIP:-}" ]]; then
+    python3 -m venv --without-pip "$work/venv"
+    pip_in=("$PIP" --python "$work/venv/bin/python")
+else
+    python3 -m venv "$work/venv"
+    pip_in=("$work/venv/bin/pip")
+fi
+# --no-compile: pip would byte-compile all of scipy, matplotlib and friends (most of the
+# install time); the runs below compile only what they import, once (bytecode is written
+# even where the caller sets PYTHONDONTWRITEBYTECODE: the venv is thrown away).
+"${pip_in[@]}" install --quiet --disable-pip-version-check --no-compile "$wheel"
+unset PYTHONDONTWRITEBYTECODE
 py="$work/venv/bin/python"
 dx="$work/venv/bin/dentalux"
 mkdir "$work/run" && cd "$work/run"
