@@ -145,3 +145,36 @@ def test_unknown_instrument_suggests_a_preset(capsys):
     assert exc.value.code == 2
     assert "instrument" in capsys.readouterr().err
     assert np.isfinite(instrument.get("infinite").white_fraction())
+
+
+def _shade_json(capsys, args):
+    with pytest.raises(SystemExit) as exc:
+        main(["shade", *args, "--json"])
+    out = capsys.readouterr()
+    return exc.value.code, out.out, out.err
+
+
+def test_shade_contract_instrument_keys_and_infinite_as_before(capsys):
+    import json
+
+    common = ["enamel", "--bands", "450,550,650", "--photons", "2000"]
+    code, out, _ = _shade_json(capsys, [*common, "--instrument", "infinite"])
+    assert code in (0, None)
+    got = json.loads(out)
+    before = dental.metrics("enamel", 1.0, bands=BANDS, photons=2000).to_json()
+    assert got == before  # exactly the infinite-geometry numbers
+    assert got["instrument"]["name"] == "infinite" and got["edge_loss"]["white"] == 0.0
+    code, out, _ = _shade_json(capsys, [*common, "--viewed-diameter", "2.5"])
+    got = json.loads(out)
+    ins = got["instrument"]
+    assert ins["name"] == f"{instrument.DEFAULT}+custom" and ins["viewed_diameter_mm"] == 2.5
+    assert set(ins) >= {"name", "geometry", "illuminated_diameter_mm", "viewed_diameter_mm",
+                        "specular", "contact_index", "backing_black", "backing_white"}
+    assert set(got["edge_loss"]) == {"black", "white"} and got["edge_loss"]["white"] > 0
+    for bad, field in ((["--viewed-diameter", "-1"], "viewed_diameter_mm"),
+                       (["--contact", "0.5"], "contact"),
+                       (["--backing-white", "1.5"], "backing_white"),
+                       (["--geometry", "d7"], "geometry"),
+                       (["--match", "vita-nope"], "shade guide")):
+        code, _, err = _shade_json(capsys, [*common, *bad])
+        assert code == 2 and field in err, (bad, err)
