@@ -202,6 +202,32 @@ def _figure(path) -> dict:
     return {"name": p.name, "src": f"data:{kind[1]};base64,{base64.b64encode(blob).decode()}"}
 
 
+def _page(spec: str, name: str, out: dict) -> dict:
+    """One material's tables: every leaf of its shade JSON in a data-key cell."""
+    lab = [{"label": label, "cells": [_cell(f"{key}.{c}", x, DIGITS[key])
+                                      for c, x in zip("Lab", out[key], strict=True)]}
+           for key, label in LAB_ROWS if key in out]
+    scalars = [{"label": label, "cell": _cell(key, out[key], DIGITS[key])}
+               for key, label in SCALAR_ROWS if key in out]
+    compare = None
+    if "delta_e00" in out:
+        dtp = out.get("delta_tp00")
+        compare = {"delta_e00": _cell("delta_e00", out["delta_e00"], DIGITS["delta_e00"]),
+                   "verdict": _cell("verdict", out.get("verdict")),
+                   "delta_tp00": _cell("delta_tp00", dtp, DIGITS["delta_tp00"]),
+                   "translucency_verdict": dental.translucency_verdict(dtp)
+                   if isinstance(dtp, float) else "—",
+                   "stderr": _cell("delta_e00_stderr", out["delta_e00_stderr"],
+                                   DIGITS["delta_e00_stderr"])
+                   if "delta_e00_stderr" in out else None}
+    shown = {k for k, _ in LAB_ROWS + SCALAR_ROWS} | set(COMPARE_SHOWN) | set(SECTION_KEYS)
+    return {"spec": spec, "name": name, "lab": lab, "scalars": scalars, "compare": compare,
+            "sections": [{"key": k, "rows": _generic_rows(out[k], k)}
+                         for k in SECTION_KEYS if k in out],
+            "other": [r for k in out if k not in shown for r in _generic_rows(out[k], k)],
+            "json_text": json.dumps(out, indent=1)}
+
+
 def build(materials, thickness: float, against=None, instrument=None, match=None,
           tp_thicknesses=None, figure=None, command: str | None = None, **kw) -> dict:
     """Everything the report shows, as plain data for the template (see module doc)."""
@@ -237,34 +263,7 @@ def build(materials, thickness: float, against=None, instrument=None, match=None
             geometry.append(g)
     where = " / ".join(g["short"] for g in geometry)
 
-    pages = []
-    for s in sections:
-        out = s["json"]
-        lab = [{"label": label, "cells": [_cell(f"{key}.{c}", x, DIGITS[key])
-                                          for c, x in zip("Lab", out[key], strict=True)]}
-               for key, label in LAB_ROWS if key in out]
-        scalars = [{"label": label, "cell": _cell(key, out[key], DIGITS[key])}
-                   for key, label in SCALAR_ROWS if key in out]
-        compare = None
-        if "delta_e00" in out:
-            compare = {"delta_e00": _cell("delta_e00", out["delta_e00"], DIGITS["delta_e00"]),
-                       "verdict": _cell("verdict", out.get("verdict")),
-                       "delta_tp00": _cell("delta_tp00", out.get("delta_tp00"),
-                                           DIGITS["delta_tp00"]),
-                       "translucency_verdict": dental.translucency_verdict(out["delta_tp00"])
-                       if isinstance(out.get("delta_tp00"), float) else "—",
-                       "stderr": _cell("delta_e00_stderr", out["delta_e00_stderr"],
-                                       DIGITS["delta_e00"])
-                       if "delta_e00_stderr" in out else None}
-        shown = {k for k, _ in LAB_ROWS + SCALAR_ROWS} | set(COMPARE_SHOWN) | set(SECTION_KEYS)
-        pages.append({
-            "spec": s["spec"], "name": mats[s["spec"]].name,
-            "lab": lab, "scalars": scalars, "compare": compare,
-            "sections": [{"key": k, "rows": _generic_rows(out[k], k)}
-                         for k in SECTION_KEYS if k in out],
-            "other": [r for k in out if k not in shown for r in _generic_rows(out[k], k)],
-            "json_text": json.dumps(out, indent=1),
-        })
+    pages = [_page(s["spec"], mats[s["spec"]].name, s["json"]) for s in sections]
     inputs = {"materials": ", ".join(map(str, materials)), "thickness [mm]": f"{thickness:g}",
               "against": against or "—", "instrument": instrument or (
                   "— (the default of dentalux shade)" if has_instruments() else
@@ -280,7 +279,7 @@ def build(materials, thickness: float, against=None, instrument=None, match=None
         "generated": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "python": platform.python_version(),
         "command": command,
-        "seed": kw.get("seed", 1),
+        "seed": kw.get("seed", "default"),
         "thickness": float(thickness), "against": against,
         "geometry": geometry,
         "pt": dental.PT, "at": dental.AT, "tpt": dental.TPT, "tat": dental.TAT,
