@@ -8,6 +8,7 @@ import sys
 import typer
 
 from dentalux.cli import demo, slab
+from dentalux.cli import design as design_cli
 from dentalux.cli import figures as figures_cli
 from dentalux.cli import fit as fit_cli
 from dentalux.cli import instruments as instruments_cli
@@ -39,6 +40,7 @@ render_cli.register(app)
 scene_cli.register(app)
 version_cli.register(app)
 report_cli.register(app)
+design_cli.register(app)
 
 
 class UserError(Exception):

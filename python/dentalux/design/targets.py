@@ -131,6 +131,10 @@ def parse(target, tp=None, read=None) -> Target:
     from dentalux import shade_guides
 
     guide, tab = kind, rest
-    row = shade_guides.tab(guide, tab)  # unknown guide or tab: ValueError naming the allowed
+    if guide not in shade_guides.guides():
+        raise ValueError(f"target = {target!r}: {guide!r} is neither lab, stack nor a shade "
+                         f"guide: allowed lab:L,a,b, stack:MATERIAL:MM/..., or GUIDE:TAB with "
+                         f"GUIDE one of {', '.join(shade_guides.guides())}")
+    row = shade_guides.tab(guide, tab)  # unknown tab: ValueError naming the allowed ones
     lab = check_lab(shade_guides.lab(guide, tab), f"target {guide}:{tab}")
     return Target(lab, tp, {"kind": "shade-guide", **row.source()})
