@@ -41,7 +41,8 @@ wheel-test: wheel
 browser:
 	@command -v chromium >/dev/null || { \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
-	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+	      --no-install-recommends chromium fonts-liberation; \
 	  else echo "browser: no chromium and not root: the report's browser test will skip"; fi; }
 
 # The main job: the paper's figures at preview quality (a few minutes on 2 cores).
