@@ -11,6 +11,7 @@ import os
 import re
 import shutil
 from html.parser import HTMLParser
+from pathlib import Path
 
 import pytest
 from dentalux import report
@@ -187,8 +188,8 @@ def test_instrument_sections_are_rendered_from_the_json(monkeypatch, tmp_path):
 
 
 def test_bad_arguments_are_refused_before_any_work(tmp_path):
-    for out, why in ((tmp_path / "r.txt", ".html"), (tmp_path / "no" / "r.html", "exist"),
-                     (tmp_path, ".html")):
+    for out, why in ((tmp_path / "r.txt", ".html"), (tmp_path, "folder"),
+                     (Path("/proc/r.html"), "/proc")):
         rc, _, err = _main(["report", "enamel", "--thickness", "1", "--out", str(out)])
         assert rc == 2 and "--out" in err and why in err, err
     rc, _, err = _main(["report", "no-such-material", "--thickness", "1", "--bands", "paper",

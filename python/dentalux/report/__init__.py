@@ -19,9 +19,7 @@ import base64
 import datetime as _dt
 import json
 import math
-import os
 import platform
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -305,33 +303,19 @@ def render_html(context: dict) -> str:
 
 
 def check_out(out) -> Path:
-    """The report's path: an ``.html`` file in an existing, writable folder."""
-    text = os.fspath(out) if out is not None else ""
-    p = Path(text)
-    if not text or p.suffix.lower() not in (".html", ".htm"):
-        raise ValueError(f"--out = {text!r}: give a file name ending in .html")
-    if p.is_dir():
-        raise ValueError(f"--out = {text!r} is a folder: give a file name ending in .html")
-    parent = p.parent
-    if not parent.is_dir():
-        raise ValueError(f"--out = {text!r}: folder {str(parent)!r} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise ValueError(f"--out = {text!r}: folder {str(parent)!r} is not writable")
-    return p
+    """The report's path: an ``.html`` file (the rules of :mod:`dentalux.output_paths`)."""
+    from dentalux.output_paths import check_out_file
+
+    return check_out_file(out, "--out", (".html", ".htm"))
 
 
 def write(out, materials, thickness: float, **kw) -> Path:
     """Build the report and write it to ``out`` (an .html file, replaced if it exists),
     atomically: a temporary file in the same folder, renamed when complete."""
+    from dentalux.output_paths import atomic_file
+
     p = check_out(out)
     html = render_html(build(materials, thickness, **kw))
-    fd, tmp = tempfile.mkstemp(prefix=".dentalux-partial-", suffix=".html", dir=p.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(html)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, p)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_file(p, "--out") as tmp:
+        tmp.write_text(html, encoding="utf-8")
     return p
