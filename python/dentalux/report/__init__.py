@@ -50,31 +50,15 @@ INFINITE_NOTE = ("infinite geometry: a laterally infinite disc on an ideal Lambe
                  "instrument aperture and no edge loss")
 
 
-def has_instruments() -> bool:
-    """Whether this dentalux reads through instruments (``dental.shade``, issue 9)."""
-    return hasattr(dental, "shade")
-
-
 def shade_json(material, thickness: float, against=None, instrument=None, match=None,
                **kw) -> dict:
-    """The object ``dentalux shade --json`` prints for these arguments.
+    """The object ``dentalux shade --json`` prints for these arguments (:func:`dental.shade`).
 
-    ``kw``: the keyword arguments of :func:`dentalux.dental.metrics` (bands, backings,
-    contact, photons, seed, estimator, observer, illuminant, threads)."""
+    ``kw``: the keyword arguments of :func:`dentalux.dental.read` (bands, backings, contact,
+    photons, seed, estimator, observer, illuminant, threads)."""
     kw.setdefault("progress", False)
-    if has_instruments():
-        return dental.shade(material, thickness, against=against, instrument=instrument,
-                            match=match, **kw)
-    for name, value in (("--instrument", instrument), ("--match", match)):
-        if value is not None:  # instruments and shade guides arrive with dental.shade
-            raise ValueError(f"{name} = {value!r}: this dentalux reads the infinite geometry "
-                             "only (no instruments or shade guides)")
-    m = dental.metrics(material, thickness, **kw)
-    out = m.to_json()
-    if against:
-        cmp = dental.compare(m, dental.metrics(against, thickness, **kw))
-        out.update({k: cmp[k] for k in COMPARE_KEYS})
-    return out
+    return dental.shade(material, thickness, against=against, instrument=instrument,
+                        match=match, **kw)
 
 
 def _leaves(obj, prefix: str = "") -> list[tuple[str, object]]:
@@ -116,13 +100,11 @@ def _generic_rows(obj, prefix: str) -> list[dict]:
 
 
 def _spectra(material, thickness: float, instrument, kw: dict):
-    """The disc's spectra (``DentalMetrics``) read as ``shade`` reads it."""
-    if has_instruments():
-        from dentalux import instrument as instruments
+    """The disc's spectra (``DentalMetrics``), read through the instrument ``shade`` uses."""
+    from dentalux import instrument as instruments
 
-        return dental.metrics(material, thickness, instrument=instruments.DEFAULT
-                              if instrument is None else instrument, **kw)
-    return dental.metrics(material, thickness, **kw)
+    return dental.metrics(material, thickness, instrument=instruments.DEFAULT
+                          if instrument is None else instrument, **kw)
 
 
 def _geometry(out: dict) -> dict:
@@ -180,7 +162,7 @@ def _tp_thicknesses(thickness: float, given) -> list[float]:
 def _input_text(key: str, value) -> str:
     """An option's value as the inputs table shows it."""
     if key == "contact" and value is None:
-        return "— (the instrument's)" if has_instruments() else "air gap"
+        return "— (the instrument's)"
     if isinstance(value, list | tuple | np.ndarray):
         return ", ".join(f"{x:g}" for x in value)
     return str(value)
@@ -230,6 +212,7 @@ def build(materials, thickness: float, against=None, instrument=None, match=None
           tp_thicknesses=None, figure=None, command: str | None = None, **kw) -> dict:
     """Everything the report shows, as plain data for the template (see module doc)."""
     from dentalux import __version__
+    from dentalux import instrument as instruments
     from dentalux.report import charts
 
     if isinstance(materials, str | Path) or not materials:
@@ -263,9 +246,9 @@ def build(materials, thickness: float, against=None, instrument=None, match=None
 
     pages = [_page(s["spec"], mats[s["spec"]].name, s["json"]) for s in sections]
     inputs = {"materials": ", ".join(map(str, materials)), "thickness [mm]": f"{thickness:g}",
-              "against": against or "—", "instrument": instrument or (
-                  "— (the default of dentalux shade)" if has_instruments() else
-                  "— (infinite geometry)"), "match": match or "—",
+              "against": against or "—",
+              "instrument": instrument or f"{instruments.DEFAULT} (the default of shade)",
+              "match": match or "—",
               **{k: _input_text(k, v) for k, v in kw.items() if k != "progress"},
               "TP chart thicknesses [mm]": ", ".join(f"{t:g}" for t in ts)}
     labelled = [(mats[s["spec"]].name, s["metrics"]) for s in sections]
