@@ -431,3 +431,17 @@ def test_slab_argument_checks():
         limits.check_lobes([(1.0, 1)])
     assert limits.check_lobes([(0.5, 0.9), (0.5, np.float64(-0.2))]) == [(0.5, 0.9),
                                                                          (0.5, -0.2)]
+
+
+@pytest.mark.parametrize("bands", ["100", "2000", "300,800"])
+def test_shade_applies_the_colour_range(capsys, bands):
+    code, _, err = run(capsys, ["shade", "enamel", "--thickness", "1", "--bands", bands])
+    assert code == 2 and "out of range: allowed [360, 830] nm" in err, err
+
+
+def test_spectra_bands_colour_range():
+    from dentalux import spectra
+
+    assert list(spectra.resolve_bands([360, 830])) == [360, 830]
+    with pytest.raises(ValueError, match=r"bands\[0\] = 359 nm"):
+        spectra.resolve_bands([359, 400])

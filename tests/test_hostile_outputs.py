@@ -310,3 +310,20 @@ def test_non_finite_film_is_refused(capsys, tmp_path, monkeypatch):
     code, _, err = run(capsys, ["render", CORNELL, "--out", tmp_path / "o", *RENDER])
     assert code == 2 and "non-finite" in err and "radiance" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_light_radiance_that_overflows_with_the_real_core(capsys, tmp_path):
+    """The probe's light of radiance 1e300: the real core's film is inf; refused, nothing
+    written, no Infinity in any JSON."""
+    import tomli_w
+    from dentalux.scene.load import read_toml
+
+    d = read_toml(CORNELL)
+    d["lights"][0]["radiance"] = 1e300
+    scene = tmp_path / "hot.toml"
+    scene.write_text(tomli_w.dumps(d))
+    code, _, err = run(capsys, ["render", scene, "--out", tmp_path / "o", "--integrator",
+                                "path", "--spp", "1", "--bands", "540", "--resolution", "4x3",
+                                "--threads", "1"])
+    assert code == 2 and "non-finite" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["hot.toml"]

@@ -68,6 +68,10 @@ def resolve_bands(spec="full", step: float = 10.0) -> np.ndarray:
         raise ValueError(f"bands = {spec!r}: need at least one positive finite wavelength [nm]")
     if np.any(np.diff(bands) <= 0):
         raise ValueError(f"bands = {spec!r}: must be strictly increasing")
+    from dentalux.limits import check_bands_in
+
+    # the colour range, as for render (docs/limits.md); a material's own range is the caller's
+    check_bands_in(bands.tolist(), -np.inf, np.inf, "", "bands", extrapolate=True)
     return bands
 
 

@@ -22,8 +22,7 @@ class MonteCarlo:
         from dentalux.limits import MAX_FIT_PHOTONS, as_int
 
         photons = as_int(photons, "photons", 1000, MAX_FIT_PHOTONS)
-        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-            raise ValueError(f"seed = {seed!r} is out of range: allowed integer >= 0")
+        seed = as_int(seed, "seed", 0, 2**64 - 1)
         if estimator not in ("weighted", "analog"):
             raise ValueError(f"estimator = {estimator!r}: allowed 'weighted' or 'analog'")
         self.photons = photons
