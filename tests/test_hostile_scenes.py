@@ -216,3 +216,29 @@ def test_point_light_inside_a_disc(tmp_path):
         scene_from_dict(_glass(_cyl(200.0), lights=[light]), base_dir=tmp_path)
     light["position"] = [200.0, 300.0, 200.0]
     scene_from_dict(_glass(_cyl(200.0), lights=[light]), base_dir=tmp_path)
+
+
+def test_obj_references_are_not_followed(folder, monkeypatch):
+    """An OBJ's ``mtllib`` is not opened: a scene reads only the files it lists in
+    ``files_read`` (trimesh, given the path, would read the material file beside it)."""
+    import builtins
+
+    import trimesh
+
+    (folder / "inner.mtl").write_text("newmtl x\nKd 1 0 0\n")
+    (folder / "refs.obj").write_text("mtllib inner.mtl\nusemtl x\nvt 0 0\n" + CUBE_OBJ)
+    opened = []
+    real_open = builtins.open
+
+    def spy(file, *a, **k):
+        opened.append(str(file))
+        return real_open(file, *a, **k)
+
+    monkeypatch.setattr(builtins, "open", spy)
+    trimesh.load(folder / "refs.obj", force="mesh", process=False)
+    assert any("inner.mtl" in o for o in opened)  # the spy sees what trimesh opens
+    opened.clear()
+    sc = scene_from_dict(with_mesh("refs.obj"), base_dir=folder)
+    monkeypatch.undo()
+    assert [r["file"] for r in sc.files_read()] == ["refs.obj"]
+    assert not any("inner.mtl" in o for o in opened), opened

@@ -143,6 +143,10 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     render: its own photon maps and paths, the pixels' sub-pixel sequence continued where
     pass p − 1 stopped; the mean of passes 0..N−1 is what ``dentalux render --passes N``
     shows).
+    progress: True (a bar on stderr), False, None (a bar when stderr is a terminal) or a
+    callable ``progress(done, total)``; an exception it raises stops the render and
+    propagates. Sizes and counts are checked first (docs/limits.md): threads 1 ... 4 x the
+    logical cores, photon and spp ceilings, and the memory the film and photon maps need.
     correlated_bands: give every band the same random streams (band key 0) instead of one
     per wavelength. Photon and camera paths then share their random numbers across bands
     (correlated sampling), so Monte Carlo noise is nearly the same in every band: it shows

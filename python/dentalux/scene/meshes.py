@@ -8,6 +8,7 @@ the ``inside`` medium, which is the orientation the core assumes.
 
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,7 +40,11 @@ def load_mesh(f: Path, path: str = "mesh.file", file: str | None = None) -> Mesh
     import trimesh  # deferred: a 0.2 s import, needed only for mesh files
 
     try:
-        mesh = trimesh.load(f, force="mesh", process=False)
+        # from the bytes, without a resolver: references inside the file (an OBJ's mtllib,
+        # texture maps) are not followed, so a mesh reads no file but itself
+        data = io.BytesIO(f.read_bytes())
+        mesh = trimesh.load(data, file_type=f.suffix.lower().lstrip("."), force="mesh",
+                            process=False)
     except Exception as exc:  # trimesh raises many types for malformed files
         raise SceneError(f"{path} = '{file}': cannot read the mesh ({exc})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
