@@ -327,3 +327,12 @@ def test_light_radiance_that_overflows_with_the_real_core(capsys, tmp_path):
                                 "--threads", "1"])
     assert code == 2 and "non-finite" in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["hot.toml"]
+
+
+def test_figures_out_checked_before_rendering(capsys, tmp_path, a_file, monkeypatch):
+    import dentalux.cli.figures as figures_cli
+
+    monkeypatch.setattr(figures_cli, "make_figures", lambda *a, **k: pytest.fail("ran"))
+    for out in ("", "/dev/shm/x", a_file):
+        code, _, err = run(capsys, ["figures", "--out", out, "--only", "fig2"])
+        assert code == 2 and "--out" in err, err

@@ -2,20 +2,22 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import typer
 
 from dentalux.figures import FIGURES, QUALITIES, make_figures
+from dentalux.output_paths import check_out_dir
 
 
 def figures_command(
-    out: Path = typer.Option(Path("figures"), "--out", help="output folder"),
+    out: str = typer.Option(
+        "figures", "--out", help="output folder (its figure files are replaced)"),
     quality: str = typer.Option("preview", help=f"{' | '.join(QUALITIES)}"),
     only: str = typer.Option(None, help=f"comma-separated subset of {','.join(FIGURES)}"),
 ) -> None:
     """Render Fig. 2-5 of the paper, a crown-vs-natural-tooth figure and a vpm/volpath crop."""
     subset = [s.strip() for s in only.split(",") if s.strip()] if only else None
+    # the figures are regenerated in place, so an existing folder is expected
+    out = check_out_dir(out, "--out", overwrite=True)
     report = make_figures(out, quality=quality, only=subset)
     print(f"figures written to {out.resolve()}:")
     for path in sorted(out.glob("*.png")):
