@@ -128,6 +128,12 @@ def test_specimen_and_backings(mats):
     assert spec[1] == (mats["opaquer"], 0.1)
     assert "+scaled" in spec[2][0].name and spec[2][1] == substrates.SUBSTRATE_DENTIN_MM
     assert design.backings("reflectance:0.2") == {"backing_black": 0.2, "backing_white": 0.2}
+    assert design.parse_fixed_layers(["enamel:0.5", f"{mats['dshade']}:0.7"]) == [
+        ("enamel", 0.5), (mats["dshade"], 0.7)]
+    for bad, msg in ((["enamel:0"], "out of range"), (["enamel"], "MATERIAL:THICKNESS"),
+                     ([], "at least one"), (["enamel:0.5"] * 4, "allowed 1 to 3")):
+        with pytest.raises(ValueError, match=msg):
+            design.parse_fixed_layers(bad)
     with pytest.raises(ValueError, match="substrate = 'bone' is unknown: allowed none"):
         design.specimen([("enamel", 0.5)], "bone")
     with pytest.raises(ValueError, match=r"reflectance:R needs R in \[0, 1\]"):

@@ -12,6 +12,7 @@ docs/design.md describes the method, its measured accuracy and its limits.
 
 from __future__ import annotations
 
+from dentalux.design.constraints import parse_fixed_layers
 from dentalux.design.search import DesignResult, optimise
 from dentalux.design.substrates import backings, specimen
 from dentalux.design.targets import Target
@@ -27,4 +28,5 @@ def read(layers, substrate: str = "dentin", cement=None, **kwargs):
     return dental.read(specimen(layers, substrate, cement), **backings(substrate), **kwargs)
 
 
-__all__ = ["DesignResult", "Target", "backings", "optimise", "read", "specimen"]
+__all__ = ["DesignResult", "Target", "backings", "optimise", "parse_fixed_layers", "read",
+           "specimen"]

@@ -86,3 +86,29 @@ def check_total(total, ranges) -> tuple[float, float] | None:
                          f"ranges (their sum spans {lo:g}-{hi:g} mm): allowed a total range "
                          f"that overlaps {lo:g}-{hi:g} mm")
     return total
+
+
+def parse_fixed_layers(texts) -> list[tuple[str, float]]:
+    """``["MATERIAL:MM", ...]`` (``dentalux shade --layer``) -> [(material, thickness)], top
+    to bottom; 1 to 3 layers, each 0 < MM <= MAX_MM."""
+    if isinstance(texts, str):
+        texts = [texts]
+    out = []
+    for i, text in enumerate(texts or []):
+        material, sep, mm = str(text).rpartition(":")
+        try:
+            t = float(mm)
+        except ValueError:
+            t = math.nan
+        if not sep or not material.strip():
+            raise ValueError(f"layer[{i}] = {text!r}: expected MATERIAL:THICKNESS, e.g. "
+                             "enamel:0.5")
+        if not (math.isfinite(t) and 0 < t <= MAX_MM):
+            raise ValueError(f"layer[{i}] thickness = {mm!r} is out of range: allowed "
+                             f"0 < thickness <= {MAX_MM:g} mm")
+        out.append((material.strip(), t))
+    if not out:
+        raise ValueError("layer: at least one MATERIAL:THICKNESS is needed (allowed 1 to 3)")
+    if len(out) > MAX_LAYERS:
+        raise ValueError(f"layer: {len(out)} given, allowed 1 to {MAX_LAYERS} layers")
+    return out
