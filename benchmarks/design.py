@@ -66,9 +66,10 @@ def main() -> None:
             p = np.array([rng.uniform(*layers[0][1]), rng.uniform(*layers[1][1])])
             fast = res.surface.at(p)
             row = {"thickness_mm": p.round(3).tolist()}
-            # seed 99: an independent read (noise of both); seed 1: the fast model's own
-            # seed (common random numbers), so what is left is the interpolation error
-            for label, seed in (("independent", 99), ("same_seed", 1)):
+            # an independent read (seed 99): the difference holds the noise of both and the
+            # interpolation error (the nodes' noise is not correlated enough between
+            # thicknesses for a same-seed read to separate the two)
+            for label, seed in (("independent", 99),):
                 mc = design.read(list(zip(["enamel", "dentin"], p, strict=True)), "dentin",
                                  instrument=args.instrument, bands="full",
                                  photons=args.photons, seed=seed, threads=args.threads)
@@ -95,10 +96,9 @@ def main() -> None:
           f"sensitivity {np.round(best['sensitivity'], 2).tolist()} ΔE00/0.1 mm, "
           f"verified {best['verified']} (max |z| {best['verification']['max_abs_z']:.2f})")
     for row in out.get("accuracy", []):
-        ind, same = row["independent"], row["same_seed"]
-        print(f"  fast vs MC at {row['thickness_mm']}: independent seed ΔE00 "
-              f"{ind['delta_e00_fast_vs_mc']:.2f} (max |z| {ind['max_abs_z']:.2f}); same seed "
-              f"(interpolation error) ΔE00 {same['delta_e00_fast_vs_mc']:.2f}")
+        ind = row["independent"]
+        print(f"  fast vs MC at {row['thickness_mm']}: ΔE00 {ind['delta_e00_fast_vs_mc']:.2f} "
+              f"(max |z| {ind['max_abs_z']:.2f})")
 
 
 
