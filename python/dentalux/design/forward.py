@@ -6,17 +6,16 @@ through the instrument (:mod:`dentalux.instrument`: lit spot, window, backing in
 walk, so the edge loss is in every number) at the nodes of a regular grid in thickness
 space, ``nodes`` per layer, for every band: the reading over the white backing and, when a
 translucency target is given, over the black one. Every node runs with the same seed
-(common random numbers: the noise is strongly correlated between nodes, so the surface is
-smooth and differences between thicknesses are far better known than the numbers
-themselves).
+(common random numbers; measured, they correlate the nodes' noise only weakly).
 
 Between the nodes each band's reading is interpolated by a tensor-product cubic spline
 (quadratic with 3 nodes, linear with 2); since the spline is linear in the data, its weights
 are computed once per axis and a dense thickness grid costs a matrix product. Colour follows
 from the interpolated spectra exactly as :func:`dentalux.dental.read` computes it (the
 same illuminant, observer and reconstruction), so the fast model is the Monte Carlo itself,
-interpolated: its error is the nodes' Monte Carlo error (carried, conservatively, as
-sum |w_i| sigma_i: the nodes are correlated) plus the interpolation error, which the
+interpolated: its error is the nodes' Monte Carlo error (carried through the spline weights
+as sqrt(sum w_i^2 sigma_i^2): common random numbers hardly correlate the nodes, whose photon
+histories part as soon as a layer boundary moves) plus the interpolation error, which the
 verification (:mod:`dentalux.design.verify`) measures.
 """
 
@@ -142,7 +141,10 @@ class Surface:
         flat_v = self.values.reshape(w.shape[1], -1)
         flat_e = self.errors.reshape(w.shape[1], -1)
         shape = (len(p),) + self.values.shape[self.k:]
-        return (w @ flat_v).reshape(shape), (np.abs(w) @ flat_e).reshape(shape)
+        # nodes taken as independent: one seed, but their histories part as soon as a layer
+        # boundary moves (a same-seed read between nodes differs from the spline as much as
+        # an independent one, benchmarks/design.py), so the root sum of squares
+        return (w @ flat_v).reshape(shape), np.sqrt((w**2) @ flat_e**2).reshape(shape)
 
     def grid(self, axes) -> np.ndarray:
         """Interpolated readings over the tensor grid ``axes`` (one array per layer):
