@@ -13,7 +13,7 @@ import time
 from dataclasses import asdict, dataclass, field
 from numbers import Real
 
-from dentalux import _core
+from dentalux import _core, limits
 from dentalux.progress import bar
 
 SCALARS = (
@@ -52,7 +52,7 @@ class Layer:
                 raise ValueError(
                     f"layers[{index}].{name} = {value!r}: must be a number"
                 )
-        lobes = [tuple(map(float, lobe)) for lobe in self.lobes] if self.lobes else None
+        lobes = limits.check_lobes(self.lobes, f"layers[{index}].lobes")
         return (
             float(self.mua),
             float(self.mus),
@@ -94,7 +94,11 @@ class SlabResult:
     window_stderr: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        d = asdict(self)
+        if not self.window:  # only a run with an instrument window has these tallies
+            d.pop("window")
+            d.pop("window_stderr")
+        return d
 
 
 def parse_incidence(incidence: str) -> tuple[str, float]:
@@ -142,15 +146,15 @@ def simulate(
     """
     if isinstance(layers, Layer):
         layers = [layers]
+    layers = limits.check_layers(layers)
     tuples = []
     for i, layer in enumerate(layers):
         if not isinstance(layer, Layer):
             raise ValueError(f"layers[{i}] must be a dentalux.Layer, got {type(layer).__name__}")
         tuples.append(layer.as_tuple(i))
-    if isinstance(n_photons, bool) or not isinstance(n_photons, int) or n_photons < 1:
-        raise ValueError(f"n_photons = {n_photons!r} is out of range: allowed integer >= 1")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ValueError(f"seed = {seed!r} is out of range: allowed integer >= 0")
+    n_photons = limits.check_slab(n_photons, threads, radial[0] if radial else None,
+                                  angular_bins, seed=seed, band=band)
+    seed = int(seed)
     kind, deg = parse_incidence(incidence)
     # rayon's default pool follows the CPUs this process may run on
     n_threads = threads or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")

@@ -1,46 +1,10 @@
-"""The ``dentalux`` command line. Each subcommand lives in its own module here and is
-registered below; bad input exits with code 2 and a message naming the field."""
+"""The ``dentalux`` command line: :func:`main` runs the command tree of
+:mod:`dentalux.cli.commands`; bad input exits with code 2 and a message naming the field,
+Ctrl-C with 130."""
 
 from __future__ import annotations
 
 import sys
-
-import typer
-
-from dentalux.cli import demo, slab
-from dentalux.cli import design as design_cli
-from dentalux.cli import figures as figures_cli
-from dentalux.cli import fit as fit_cli
-from dentalux.cli import instruments as instruments_cli
-from dentalux.cli import materials as materials_cli
-from dentalux.cli import plot as plot_cli
-from dentalux.cli import render as render_cli
-from dentalux.cli import report as report_cli
-from dentalux.cli import scene as scene_cli
-from dentalux.cli import shade as shade_cli
-from dentalux.cli import tooth as tooth_cli
-from dentalux.cli import version as version_cli
-
-app = typer.Typer(
-    add_completion=False,
-    no_args_is_help=True,
-    pretty_exceptions_enable=False,
-    help="Spectral Monte Carlo rendering of teeth and dental materials (mm, 1/mm, nm).",
-)
-slab.register(app)
-demo.register(app)
-figures_cli.register(app)
-materials_cli.register(app)
-tooth_cli.register(app)
-shade_cli.register(app)
-instruments_cli.register(app)
-plot_cli.register(app)
-fit_cli.register(app)
-render_cli.register(app)
-scene_cli.register(app)
-version_cli.register(app)
-report_cli.register(app)
-design_cli.register(app)
 
 
 class UserError(Exception):
@@ -50,8 +14,10 @@ class UserError(Exception):
 def main(argv: list[str] | None = None) -> None:
     """Console entry point."""
     try:
+        from dentalux.cli.commands import app
+
         app(args=argv, prog_name="dentalux")
-    except (ValueError, UserError, FileNotFoundError, KeyError) as exc:
+    except (ValueError, TypeError, OSError, UserError, KeyError) as exc:
         msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
         print(f"error: {msg}", file=sys.stderr)
         sys.exit(2)

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import json
-
 import typer
 from rich.console import Console
 from rich.table import Table
 
 from dentalux import dental, instrument
+from dentalux.outputs import dumps_strict
 from dentalux.spectra import full_bands
 
 
@@ -103,7 +102,7 @@ def shade_command(
     out = dental.shade(material, thickness, against=against, instrument=inst, match=match,
                        specimen=specimen, **kw)
     if as_json:
-        print(json.dumps(out))
+        print(dumps_strict(out))
         return
     m = out
     ins = m["instrument"]
