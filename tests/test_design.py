@@ -282,3 +282,14 @@ def test_api_bad_input_is_valueerror(mats):
     with pytest.raises(ValueError, match="no data over the bands"):
         design.optimise("lab:70,0,15", [(mats["redonly"], (0.2, 0.4))], bands=BANDS)
     assert constraints.parse_range("0.3-0.8", "x") == (0.3, 0.8)
+
+
+def test_infinite_geometry_design_is_verified(mats):
+    """The ``infinite`` instrument (the adding formula of dental.read) drives the fast model
+    too, and the verification agrees with it."""
+    res = design.optimise("lab:70,2,15", [(mats["dshade"], (0.2, 1.0))], substrate="dentin",
+                          instrument="infinite", bands=[450, 550, 650], photons=4000,
+                          designs=1)
+    d = res.designs[0]
+    assert d["verified"] is True, d["verification"]
+    assert res.to_json()["instrument"]["name"] == "infinite"

@@ -59,6 +59,18 @@ def axis_weights(nodes: np.ndarray, t) -> np.ndarray:
     return np.asarray(spline(np.clip(t, nodes[0], nodes[-1])))
 
 
+def _adding(top, bottom, rb: float) -> tuple[float, float]:
+    """R(rb) = R1 + T1 rb T2 / (1 - rb R2) and its first-order standard error."""
+    r1, t1 = top.total_reflectance, top.total_transmittance
+    r2, t2 = bottom.total_reflectance, bottom.total_transmittance
+    q = 1.0 / (1.0 - rb * r2)
+    value = r1 + t1 * rb * t2 * q
+    grads = (1.0, rb * t2 * q, t1 * rb * q, t1 * rb * t2 * rb * q * q)
+    errs = (top.stderr["total_reflectance"], top.stderr["total_transmittance"],
+            bottom.stderr["total_transmittance"], bottom.stderr["total_reflectance"])
+    return value, float(np.sqrt(sum((g * e) ** 2 for g, e in zip(grads, errs, strict=True))))
+
+
 class ColourMap:
     """Band readings (..., bands) -> CIELAB, as dental.read computes colour."""
 
@@ -112,11 +124,26 @@ class Surface:
                     stack = [Layer(mua=float(o.mua[b]), mus=float(o.mus[b]), g=float(o.g[b]),
                                    n=float(o.n[b]), thickness=t, fd=float(o.fd[b]))
                              for o, t in zip(optics, thick, strict=True)]
+                    common = dict(n_photons=int(photons), seed=int(seed),
+                                  estimator=estimator, threads=threads)
+                    if inst.is_infinite:
+                        # the adding formula of dental.read's infinite geometry: R1, T1 for
+                        # the beam from above, R2, T2 for diffuse light from below
+                        a = simulate(stack, band=b, n_above=1.0, n_below=n_below, **common)
+                        f = simulate(stack[::-1], band=100_000 + b, n_above=n_below,
+                                     n_below=1.0, incidence="diffuse", **common)
+                        self.photons += 2 * int(photons)
+                        for c, (_, rb, _) in enumerate(channels):
+                            v, e = _adding(a, f, float(rb[b]))
+                            self.values[idx + (c, b)] = v
+                            self.errors[idx + (c, b)] = e
+                        if cb:
+                            cb(step * len(wl) + b + 1)
+                        continue
                     for c, (_, rb, band0) in enumerate(channels):
-                        res = simulate(stack, n_photons=int(photons), seed=int(seed),
-                                       band=band0 + b, n_above=1.0, n_below=n_below,
-                                       incidence=incidence, estimator=estimator,
-                                       threads=threads, window=inst.window(float(rb[b])))
+                        res = simulate(stack, band=band0 + b, n_above=1.0, n_below=n_below,
+                                       incidence=incidence, window=inst.window(float(rb[b])),
+                                       **common)
                         v, e = inst.reading(res.window, res.window_stderr)
                         self.values[idx + (c, b)] = v
                         self.errors[idx + (c, b)] = e
