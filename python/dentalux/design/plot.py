@@ -65,7 +65,7 @@ def plane(result, path: str) -> Path:
         f" (no feasible design under {dental.AT}: min {np.nanmin(de[feasible]):.1f})"
     ax.set_title(f"target {label} on {result.substrate}, {result.instrument['name']}{note}",
                  fontsize=8)
-    ax.legend(loc="upper right", fontsize=7)
+    ax.legend(loc="best", fontsize=7)
     fig.tight_layout()
     tmp = p.with_name(p.name + ".part.png")
     fig.savefig(tmp)
