@@ -116,7 +116,7 @@ def test_shade_guides_loader():
 # -- specimen ----------------------------------------------------------------------------
 
 
-def test_specimen_and_backings(mats):
+def test_specimen_and_backings(mats, tmp_path):
     spec = design.specimen([("enamel", 0.5), ("dentin", 0.7)], "dentin")
     assert spec[:2] == [("enamel", 0.5), ("dentin", 0.7)]
     assert spec[2] == ("dentin", substrates.SUBSTRATE_DENTIN_MM)
@@ -138,6 +138,12 @@ def test_specimen_and_backings(mats):
         design.specimen([("enamel", 0.5)], "bone")
     with pytest.raises(ValueError, match=r"reflectance:R needs R in \[0, 1\]"):
         design.backings("reflectance:1.5")
+    csv = tmp_path / "stump.csv"
+    csv.write_text("wavelength_nm,reflectance\n400,0.1\n700,0.3\n")
+    assert design.backings(f"reflectance:{csv}")["backing_white"] == ((400.0, 700.0), (0.1, 0.3))
+    csv.write_text("wavelength_nm,reflectance\n400,0.1\n700,1.3\n")
+    with pytest.raises(ValueError, match=r"reflectance must lie in \[0, 1\]"):
+        design.backings(f"reflectance:{csv}")
 
 
 # -- round trip and verification -----------------------------------------------------------
@@ -257,6 +263,8 @@ def test_target_tp_is_reported(mats):
     (["--layer", "E:0.2-0.4", "--target", "lab:50,0,200"], "outside the CIELAB range"),
     (["--layer", "E:0.2-0.4", "--target-tp", "-1"], "target_tp"),
     (["--layer", "E:0.2-0.4", "--substrate", "bone"], "substrate"),
+    (["--layer", "E:0.2-0.4", "--substrate", "zirconia", "--target-tp", "5"], "TP is 0"),
+    (["--layer", "E:0.2-0.4", "--render", "out"], "not implemented"),
 ])
 def test_cli_bad_input_exits_2(mats, capsys, args, message):
     names = {"E": mats["eshade"], "D": mats["dshade"], "R": mats["redonly"]}

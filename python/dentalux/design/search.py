@@ -125,7 +125,13 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
     total = constraints.check_total(total, ranges)
     substrate = substrates.check(substrate)
     inst_plain = instruments.get(instrument)
-    inst = inst_plain.override(**substrates.backings(substrate))
+    try:
+        inst = inst_plain.override(**substrates.backings(substrate))
+    except ValueError as exc:
+        if not substrate.endswith(".csv"):
+            raise
+        raise ValueError(f"substrate = {substrate!r}: the instrument model does not take this "
+                         f"spectral backing ({exc}); give reflectance:R for now") from None
     wl = resolve_bands(bands)
     for name, value in (("photons", photons), ("designs", designs)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -179,6 +185,10 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
 
     tgt = targets.parse(target, target_tp, read=read_stack)
     tp = tgt.tp00 is not None
+    if tp and substrates.backings(substrate):
+        raise ValueError(f"target_tp with substrate = {substrate!r}: an opaque core replaces "
+                         "both backings, so TP is 0 by construction; a TP target needs "
+                         "substrate none, dentin or stump")
 
     colour = ColourMap(wl, illuminant, observer, reconstruction)
     surface = Surface(parts, ranges, tail, inst, wl, rb_white, rb_black, colour, photons,
