@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dentalux import materials, spectra
+from dentalux import materials, natural_teeth, spectra
 from dentalux.outputs import peak_memory_bytes, write_render_outputs
 from dentalux.render import render
 from dentalux.scene.builtin import discs as discs_scene
@@ -388,11 +388,60 @@ def fig_crown(out: Path, quality: Quality) -> dict:
     de = float(delta_e00(labs["natural"], labs["crown"]))
     summary["delta_e00"] = de
     summary["verdict"] = verdict(de)
+    # the natural incisor's labial middle third against the published natural-tooth range
+    rng = natural_teeth.reference_range("mid-incisal")
+    summary["natural_range"] = rng
+    summary["natural_in_range"] = natural_teeth.inside(labs["natural"], rng)
     _annotate(out / "crown_vs_natural" / "image.png", out / "crown_vs_natural.png", regions,
               f"ΔE00 = {de:.2f} ({summary['verdict']})")
     (out / "crown_vs_natural" / "figure.json").write_text(
         json.dumps(summary, indent=2, default=str))
     return summary
+
+
+# the natural incisor's labial thirds: (height above the CEJ, labial face depth) [mm] in the
+# crown scene (tooth z up, labial +y towards the camera after the -90 deg turn about x)
+NATURAL_THIRDS = {"cervical": (1.7, -3.4), "middle": (5.0, -3.5), "incisal": (8.5, -1.9)}
+
+
+def crown_translucency(quality: Quality, half_mm: float = 0.8, seed: int = 1,
+                       bands=PAPER_BANDS) -> dict:
+    """The natural incisor's translucency by thirds, read in the render as a TP: the crown
+    scene over the black contrastor and over a white one (reflectance 0.85), both calibrated
+    by the same white tile; TP = ΔE*ab between the two readings of each third. Returns
+    {third: {"lab_black", "lab_white", "tp"}} and the settings used."""
+    from dentalux.color import delta_e76
+    from dentalux.outputs import colour_inputs
+    from dentalux.scene.project import square_region
+
+    scene, regions = crown_scene(quality)
+    cam = scene["camera"]
+    thirds = {name: square_region(cam, [6.5, y, z], half_mm)
+              for name, (y, z) in NATURAL_THIRDS.items()}
+    tile = white_tile(scene, regions, quality)
+    lower_anisotropy(scene, quality, bands)
+    labs = {}
+    for backdrop, surface in (("black", {"type": "black"}),
+                              ("white", {"type": "lambertian", "reflectance": 0.85})):
+        d = copy.deepcopy(scene)
+        d["surfaces"]["backdrop"] = surface
+        sc = scene_from_dict(d)
+        s = _teeth_settings(quality)
+        result = render(sc, integrator="vpm", bands=bands, seed=seed, correlated_bands=True,
+                        spp=s["spp"], photons=quality.photons,
+                        volume_photons=s["volume_photons"], volume_stored=s["volume_stored"],
+                        aim=s["aim"], k=s["k"], radius=s["radius"], progress=False)
+        divisor, _, _ = colour_inputs(sc, bands)
+        rel = result.radiance / divisor / tile["white"]
+        from dentalux.color import spectrum_to_Lab
+
+        labs[backdrop] = {name: np.asarray(spectrum_to_Lab(
+            rel[y0:y1, x0:x1].mean(axis=(0, 1)), np.asarray(bands)))
+            for name, (x0, y0, x1, y1) in thirds.items()}
+    return {name: {"lab_black": labs["black"][name].tolist(),
+                   "lab_white": labs["white"][name].tolist(),
+                   "tp": float(delta_e76(labs["black"][name], labs["white"][name]))}
+            for name in thirds} | {"regions": thirds, "white_tile": tile}
 
 
 def _annotate(src: Path, dst: Path, regions: dict, text: str) -> None:
