@@ -61,7 +61,7 @@ def design_command(
 
         plane(res, plot)
     if as_json:
-        print(json.dumps(res.to_json()))
+        print(json.dumps(res.to_json(), allow_nan=False))
         return
     t = res.target
     table = Table(title=f"designs for L*a*b* {t.lab[0]:.2f} {t.lab[1]:.2f} {t.lab[2]:.2f}"
