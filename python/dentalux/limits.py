@@ -13,6 +13,8 @@ import math
 import os
 from numbers import Integral, Real
 
+from dentalux import _core
+
 # --- counts -------------------------------------------------------------------------------
 #: worker threads: 1 ... THREADS_PER_CORE x the logical cores of this machine
 THREADS_PER_CORE = 4
@@ -26,7 +28,7 @@ MAX_RENDER_PHOTONS = 10_000_000_000
 #: samples per pixel of a render
 MAX_SPP = 1_000_000
 #: rings of ``dentalux slab --radial-bins`` and bins of ``--angle-bins``
-MAX_RADIAL_BINS = 1_000_000
+MAX_RADIAL_BINS = _core.SLAB_MAX_PROFILE_BINS  # the core's ceiling (integrators/slab.rs)
 MAX_ANGLE_BINS = 100_000
 #: pixels of a rendered image (width x height), e.g. 8192 x 8192
 MAX_PIXELS = 67_108_864

@@ -116,9 +116,9 @@ pub struct SlabConfig {
     pub window: Option<Window>,
 }
 
-/// Most bins of a radial or angular profile: each thread keeps its own copies, so the cap
-/// keeps a run's profile memory below ~0.5 GB (8 B × 2 profiles × bins × (threads + 1)).
-pub const MAX_PROFILE_BINS: usize = 1 << 22;
+/// Most bins of a radial or angular profile (`dentalux.limits` reads it): each batch keeps
+/// its own copies, so the cap bounds a run's profile memory before anything is allocated.
+pub const MAX_PROFILE_BINS: usize = 1_000_000;
 
 /// Scalar results, in this order in [`SlabResult::values`] and [`SlabResult::stderr`].
 pub const SCALAR_KEYS: [&str; 7] = [
