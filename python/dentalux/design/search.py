@@ -99,6 +99,19 @@ def _sensitivity(surface: Surface, point: np.ndarray) -> list[float]:
     return out
 
 
+def jacobian(surface: Surface, point, h: float = 0.02) -> np.ndarray:
+    """d(L*, a*, b*)/d(thickness) [1/mm] of the fast model at ``point``, (3, layers), by
+    central differences of ``h`` mm (one-sided at a range limit)."""
+    point = np.asarray(point, dtype=float)
+    out = np.zeros((3, len(point)))
+    for d, (lo, hi) in enumerate(surface.ranges):
+        up, down = point.copy(), point.copy()
+        up[d], down[d] = min(hi, point[d] + h), max(lo, point[d] - h)
+        labs = surface.metrics(surface.readings(np.stack([up, down]))[0])["lab_white"]
+        out[:, d] = (labs[0] - labs[1]) / (up[d] - down[d])
+    return out
+
+
 def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
              instrument=instruments.DEFAULT, bands="full", target_tp: float | None = None,
              photons: int = DEFAULT_PHOTONS, verify_photons: int | None = None, seed: int = 1,
