@@ -3,8 +3,9 @@
 # throwaway virtual environment with nothing but its declared dependencies (pip's cache is
 # reused), then use it from an empty folder outside the checkout:
 #   dentalux --version (must be pyproject.toml's version), every data file, scene and
-#   template of python/dentalux present in the install, a slab, a tiny render of the packaged
-#   discs scene, `dentalux shade --json` and a small `dentalux report`.
+#   template of python/dentalux present in the install, a slab, `dentalux demo`, Fig. 2 of
+#   `dentalux figures`, a tiny render of the packaged discs scene, `dentalux shade --json`
+#   and a small `dentalux report`.
 # Usage: [PIP=.venv/bin/pip] tests/wheel_smoke.sh dist/dentalux-VERSION-*.whl
 set -euo pipefail
 
@@ -62,6 +63,11 @@ EOF
 step "slab"
 "$dx" slab --mua 0.1 --mus 5 --g 0.8 --n 1.5 --thickness 1 --photons 20000 --json \
     | "$py" -c 'import json, sys; d = json.load(sys.stdin); print("  R", d["total_reflectance"])'
+
+step "demo (the Table 1 slab) and figures --only fig2 (data files read by the figures)"
+"$dx" demo --photons 20000 > demo.log
+"$dx" figures --quality preview --only fig2 --out figures > figures.log
+test -s figures/fig2_spd.png
 
 step "tiny render of the packaged discs scene"
 scene=$("$py" -c 'from dentalux.scene.builtin import scene_file; print(scene_file("discs"))')
