@@ -146,15 +146,29 @@ def test_page_is_self_contained_and_complete(made):
         assert needle in text, needle
 
 
-def test_infinite_geometry_is_stated_and_a_figure_embedded(tmp_path):
+def test_infinite_geometry_is_stated_and_a_figure_and_render_embedded(tmp_path):
     from PIL import Image
 
     png = tmp_path / "render.png"
     Image.new("RGB", (8, 6), (200, 180, 150)).save(png)
+    run = tmp_path / "run"  # what `dentalux render --out run` leaves (the parts read)
+    run.mkdir()
+    Image.new("RGB", (8, 6), (90, 90, 90)).save(run / "image.png")
+    (run / "colour.json").write_text(json.dumps({
+        "illuminant": "D65", "observer": "2",
+        "regions": {"incisal": {"rect": [0, 0, 4, 3], "lab": [71.234, 1.5, 12.25]}}}))
+    (run / "render.json").write_text(json.dumps({"scene_name": "crown"}))
     html = report.render_html(report.build("enamel", 1.0, instrument="infinite", bands="paper",
-                                           photons=300, tp_thicknesses=[1.0], figure=png))
+                                           photons=300, tp_thicknesses=[1.0], figure=png,
+                                           render=run))
     assert 'id="infinite-geometry">infinite geometry: a laterally infinite disc' in html
-    assert html.count('<img src="data:image/png;base64,') == 4 and "render.png" in html
+    assert html.count('<img src="data:image/png;base64,') == 5 and "render.png" in html
+    assert "crown (run/image.png)" in html and "incisal" in html and ">71.23<" in html
+    (run / "colour.json").write_text("{")
+    with pytest.raises(ValueError, match="--render"):
+        report._render(run)
+    with pytest.raises(ValueError, match="--render"):
+        report._render(tmp_path)
     fake = tmp_path / "fake.png"
     fake.write_text("not an image")
     for bad, why in ((fake, "not a png"), (tmp_path / "r.gif", ".png or .jpg"),

@@ -72,8 +72,8 @@ test -s figures/fig2_spd.png
 step "tiny render of the packaged discs scene"
 scene=$("$py" -c 'from dentalux.scene.builtin import scene_file; print(scene_file("discs"))')
 "$dx" render "$scene" --out render --resolution 16x12 --spp 1 --photons 2000 \
-    --volume-photons 5000 --bands 540 --threads 2 > render.log
-test -s render/radiance.npy && test -s render/render.json
+    --volume-photons 5000 --threads 2 > render.log
+test -s render/radiance.npy && test -s render/render.json && test -s render/image.png
 
 step "shade"
 "$dx" shade enamel --against dentin --bands paper --photons 2000 --json > shade.json
@@ -81,6 +81,6 @@ step "shade"
 
 step "report"
 "$dx" report enamel --against dentin --thickness 1 --bands paper --photons 1000 \
-    --tp-thicknesses 0.5 --out report.html > /dev/null
+    --tp-thicknesses 0.5 --render render --out report.html > /dev/null
 grep -q 'data-key="tp00"' report.html
 step "passed"

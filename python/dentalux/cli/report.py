@@ -45,7 +45,9 @@ def report_command(
     threads: int = typer.Option(None, help="worker threads (default: all cores)"),
     tp_thicknesses: str = typer.Option(None, help="comma-separated thicknesses [mm] of the "
                                        "TP-vs-thickness chart (default 0.25-2 x --thickness)"),
-    figure: Path = typer.Option(None, help="a rendered image (.png/.jpg) to embed"),
+    figure: Path = typer.Option(None, help="an image (.png/.jpg) to embed"),
+    render: Path = typer.Option(None, help="a `dentalux render --out` folder: its image and "
+                                "the CIELAB of its regions"),
 ) -> None:
     """One HTML file: the `shade --json` numbers, ΔE00 verdict, charts and provenance."""
     from dentalux import report
@@ -60,7 +62,7 @@ def report_command(
                              "thicknesses [mm]") from None
     report.check_out(out)  # refuse a bad --out before any photon is traced
     path = report.write(out, materials, thickness, against=against, instrument=instrument,
-                        match=match, tp_thicknesses=ts, figure=figure,
+                        match=match, tp_thicknesses=ts, figure=figure, render=render,
                         command=_command(), bands=_bands(bands),
                         backing_black=backing_black, backing_white=backing_white,
                         contact=contact, photons=photons, seed=seed, estimator=estimator,

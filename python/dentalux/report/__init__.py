@@ -208,8 +208,33 @@ def _page(spec: str, name: str, out: dict) -> dict:
             "json_text": json.dumps(out, indent=1)}
 
 
+def _render(folder) -> dict:
+    """A ``dentalux render --out`` folder to embed (``--render``): its colour image and the
+    CIELAB of its named regions (colour.json), with the scene's name (render.json)."""
+    d = Path(folder)
+    colour = d / "colour.json"
+    if not d.is_dir() or not colour.is_file():
+        raise ValueError(f"--render = {str(folder)!r}: not a `dentalux render --out` folder "
+                         "with a colour image (no colour.json in it)")
+    try:
+        c = json.loads(colour.read_text(encoding="utf-8"))
+        meta = json.loads((d / "render.json").read_text(encoding="utf-8")) \
+            if (d / "render.json").is_file() else {}
+        regions = [{"name": str(n), "rect": ", ".join(str(int(v)) for v in r["rect"]),
+                    "lab": [f"{float(x):.2f}" for x in r["lab"]]}
+                   for n, r in (c.get("regions") or {}).items()]
+    except (ValueError, KeyError, TypeError, AttributeError):
+        raise ValueError(f"--render = {str(folder)!r}: colour.json or render.json is not "
+                         "what `dentalux render` writes") from None
+    image = _figure(d / "image.png")
+    return {**image, "name": f"{meta.get('scene_name') or d.name} ({d.name}/image.png)",
+            "regions": regions, "illuminant": c.get("illuminant"),
+            "observer": c.get("observer")}
+
+
 def build(materials, thickness: float, against=None, instrument=None, match=None,
-          tp_thicknesses=None, figure=None, command: str | None = None, **kw) -> dict:
+          tp_thicknesses=None, figure=None, render=None, command: str | None = None,
+          **kw) -> dict:
     """Everything the report shows, as plain data for the template (see module doc)."""
     from dentalux import __version__
     from dentalux import instrument as instruments
@@ -223,6 +248,7 @@ def build(materials, thickness: float, against=None, instrument=None, match=None
     kw["progress"] = False
     ts = _tp_thicknesses(float(thickness), tp_thicknesses)
     figure = _figure(figure) if figure is not None else None
+    render = _render(render) if render is not None else None
     specs = list(materials) + ([against] if against else [])
     mats = {str(s): dental._resolve_material(s) for s in specs}
     sections = []
@@ -270,7 +296,7 @@ def build(materials, thickness: float, against=None, instrument=None, match=None
                    charts.tp_thickness([(mats[s["spec"]].name, s["tp"]) for s in sections],
                                        float(thickness), where)],
         "provenance": [{"spec": k, **_provenance(m)} for k, m in mats.items()],
-        "figure": figure,
+        "figure": figure, "render": render,
     }
 
 
