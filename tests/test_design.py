@@ -272,6 +272,8 @@ def test_target_tp_is_reported(mats):
     (["--layer", "E:0.2-0.4", "--substrate", "bone"], "substrate"),
     (["--layer", "E:0.2-0.4", "--substrate", "zirconia", "--target-tp", "5"], "TP is 0"),
     (["--layer", "E:0.2-0.4", "--render", "out"], "not implemented"),
+    (["--layer", "E:0.2-0.4", "--plot", "plane.png"], "exactly 2 layers"),
+    (["--layer", "E:0.2-0.4", "--layer", "D:0.2-0.4", "--plot", "plane.txt"], "end in .png"),
 ])
 def test_cli_bad_input_exits_2(mats, capsys, args, message):
     names = {"E": mats["eshade"], "D": mats["dshade"], "R": mats["redonly"]}

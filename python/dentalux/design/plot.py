@@ -12,17 +12,13 @@ from dentalux import dental
 
 
 def check_path(path: str, layers: int) -> Path:
-    """A writable PNG path for a two-layer design, checked before any work."""
-    p = Path(path)
-    if p.suffix.lower() != ".png":
-        raise ValueError(f"--plot = {path!r}: must end in .png")
+    """A writable PNG path for a two-layer design, checked before any work
+    (:func:`dentalux.output_paths.check_out_file`)."""
+    from dentalux.output_paths import check_out_file
+
     if layers != 2:
         raise ValueError(f"--plot: the ΔE00 plane needs exactly 2 layers, {layers} given")
-    if p.is_dir():
-        raise ValueError(f"--plot = {path!r} is a folder: give a file name")
-    if not p.parent.exists() or not p.parent.is_dir():
-        raise ValueError(f"--plot = {path!r}: folder {str(p.parent)!r} does not exist")
-    return p
+    return check_out_file(path, "--plot", (".png",))
 
 
 def plane(result, path: str) -> Path:
@@ -67,8 +63,11 @@ def plane(result, path: str) -> Path:
                  fontsize=8)
     ax.legend(loc="best", fontsize=7)
     fig.tight_layout()
-    tmp = p.with_name(p.name + ".part.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    tmp.replace(p)
+    from dentalux.output_paths import atomic_file
+
+    try:
+        with atomic_file(p, "--plot") as tmp:
+            fig.savefig(tmp)
+    finally:
+        plt.close(fig)
     return p
