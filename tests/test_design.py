@@ -244,6 +244,8 @@ def test_cli_json_contract_and_plot(mats, tmp_path, capsys):
                 "sensitivity", "verified"} <= set(d)
         assert len(d["thickness_mm"]) == 2 and 0.5 - 1e-9 <= sum(d["thickness_mm"]) <= 1.2
         assert isinstance(d["verified"], bool)
+        assert len(d["thickness_stderr_mm"]) == 2
+        assert all(x is None or x > 0 for x in d["thickness_stderr_mm"])
     assert png.stat().st_size > 1000
 
 

@@ -112,6 +112,21 @@ def jacobian(surface: Surface, point, h: float = 0.02) -> np.ndarray:
     return out
 
 
+def _thickness_stderr(surface: Surface, point, lab_err, target_err) -> list:
+    """How well the colour pins each thickness: the fast model's and the target's L*, a*,
+    b* errors mapped through J = dLab/dt, Cov(t) = (J^T C^-1 J)^-1 (None where the colour
+    does not pin a layer: J rank-deficient)."""
+    var = np.maximum(np.asarray(lab_err) ** 2 + np.asarray(target_err) ** 2, 1e-12)
+    j = jacobian(surface, point)
+    info = j.T @ np.diag(1.0 / var) @ j
+    try:
+        cov = np.linalg.inv(info)
+    except np.linalg.LinAlgError:
+        return [None] * len(point)
+    diag = np.diag(cov)
+    return [float(np.sqrt(x)) if np.isfinite(x) and x >= 0 else None for x in diag]
+
+
 def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
              instrument=instruments.DEFAULT, bands="full", target_tp: float | None = None,
              photons: int = DEFAULT_PHOTONS, verify_photons: int | None = None, seed: int = 1,
@@ -253,7 +268,10 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
         if tp:
             fast_json.update(tp00=fast["values"]["tp00"], tp00_stderr=fast["stderr"]["tp00"])
         design = {"thickness_mm": thick, "materials": names,
-                  "sensitivity": _sensitivity(surface, point)}
+                  "sensitivity": _sensitivity(surface, point),
+                  "thickness_stderr_mm": _thickness_stderr(
+                      surface, point, np.asarray(fast["stderr"]["lab_white"]),
+                      np.asarray(tgt.lab_stderr))}
         if check:
             t0 = time.perf_counter()
             specimen = substrates.specimen(list(zip(parts, thick, strict=True)), substrate, cement)
