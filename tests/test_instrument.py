@@ -178,3 +178,21 @@ def test_shade_contract_instrument_keys_and_infinite_as_before(capsys):
                        (["--match", "vita-nope"], "shade guide")):
         code, _, err = _shade_json(capsys, [*common, *bad])
         assert code == 2 and field in err, (bad, err)
+
+
+def test_shade_layered_specimen_has_the_same_keys_and_reads_like_dental_read(capsys):
+    import json
+
+    code, out, _ = _shade_json(capsys, ["--layer", "biomaterial-table1:0.5", "--layer",
+                                        "dentin:1.0", "--bands", "450,550,650", "--photons",
+                                        "2000"])
+    got = json.loads(out)
+    assert set(got) >= set(dental.JSON_KEYS) and [x["thickness_mm"] for x in got["layers"]] \
+        == [0.5, 1.0]
+    direct = dental.read([("biomaterial-table1", 0.5), ("dentin", 1.0)], bands=BANDS,
+                         photons=2000, instrument=instrument.DEFAULT)
+    assert got["tp"] == direct.tp and got["lab_white"] == direct.lab_white
+    for bad in (["--layer", "dentin:0"], ["enamel", "--layer", "dentin:1"],
+                ["--layer", "a:1", "--layer", "b:1", "--layer", "c:1", "--layer", "d:1"]):
+        code, _, err = _shade_json(capsys, bad)
+        assert code == 2 and ("layer" in err or "MATERIAL" in err), (bad, err)

@@ -91,6 +91,9 @@ def shade_command(
             from dentalux import design
 
             specimen = design.specimen(specimen, substrate)
+            core = design.backings(substrate)  # an opaque core replaces both backings
+            backing_black = core.get("backing_black", backing_black)
+            backing_white = core.get("backing_white", backing_white)
     elif material is None:
         raise ValueError("MATERIAL: missing (or give --layer MATERIAL:THICKNESS)")
     elif substrate is not None:
