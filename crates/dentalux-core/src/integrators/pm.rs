@@ -17,9 +17,10 @@
 //! `r_max` is `settings.radius` or, when unset, a tenth of the scene's bounding-box diagonal
 //! (it only matters where fewer than k photons lie within it).
 
-use super::path::{check_clear_media, direct_irradiance, facing};
+use super::direct::{check_clear_media, direct_irradiance, facing};
 use super::photon_trace::{trace_photons, StoreMode};
-use super::render::{render_tiles, Scratch, Settings, Stats};
+use super::settings::{Settings, Stats};
+use super::tiles::{render_tiles, Scratch};
 use super::transport::{cross, spawn};
 use crate::control::Control;
 use crate::error::Result;

@@ -32,7 +32,8 @@ use crate::error::Result;
 use crate::geometry::{Hit, Ray, Vec3};
 use crate::integrators::photon_trace::trace_camera_maps;
 use crate::integrators::photon_trace::{PhotonMaps, StoreMode};
-use crate::integrators::render::{render_tiles, Scratch, Settings, Stats};
+use crate::integrators::settings::{Settings, Stats, DEFAULT_CLIP, DEFAULT_LAYER};
+use crate::integrators::tiles::{render_tiles, Scratch};
 use crate::integrators::transport::{cross, eq13_transmittance, spawn, straight_transmittance};
 use crate::lights::Light;
 use crate::photon_map::{KernelClip, PhotonMap, Planes, PHOTON_BYTES};
@@ -51,12 +52,6 @@ const MIN_STEP_FRACTION: f64 = 1e-5;
 const RR_WEIGHT: f64 = 0.05;
 /// Default of [`VpmParams::map_threshold`].
 pub const DEFAULT_MAP_THRESHOLD: f64 = 0.3;
-/// Default of [`VpmParams::layer`]: the layer kernel's half-height over the gathering radius
-/// (0.2 and 0.5 measured the same on the slab; docs/vpm-convergence.md).
-pub const DEFAULT_LAYER: f64 = 0.3;
-/// Default of [`VpmParams::clip`]: on. On Fig. 3 it lowers the bias of averaged passes from
-/// 3.9 % to 2.8 % (rms over the image) for about 25 % more camera time (docs/vpm-convergence.md).
-pub const DEFAULT_CLIP: bool = true;
 /// Default of [`VpmParams::light_strata`].
 pub const DEFAULT_LIGHT_STRATA: u32 = 3;
 

@@ -1,0 +1,214 @@
+//! The settings of the render contract (docs/render-contract.md) that every integrator reads,
+//! their defaults and ranges, and the statistics returned with the image.
+
+use crate::error::{Error, Result};
+use crate::rng::PASS_BITS;
+
+/// Bound on the pass number: passes run 1 ..= MAX_PASSES − 1 (the pass number must fit
+/// [`PASS_BITS`] bits of the seeds and stream tags, `rng::pass_seed` and `rng::pass_tag`).
+pub const MAX_PASSES: u32 = 1 << PASS_BITS;
+
+/// Default of [`Settings::kernel_layer`] (`VpmParams::layer`): the layer kernel's
+/// half-height over the gathering radius (0.2 and 0.5 measured the same on the slab;
+/// docs/vpm-convergence.md).
+pub const DEFAULT_LAYER: f64 = 0.3;
+
+/// Default of [`Settings::kernel_clip`] (`VpmParams::clip`): on. On Fig. 3 it lowers the
+/// bias of averaged passes from 3.9 % to 2.8 % (rms over the image) for about 25 % more
+/// camera time (docs/vpm-convergence.md).
+pub const DEFAULT_CLIP: bool = true;
+
+/// Which integrator renders the band.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Integrator {
+    /// Direct light + specular dielectrics + surface photon map (opaque scenes, clear media).
+    Pm,
+    /// Brute-force path tracer with next-event estimation: the reference for `pm`.
+    Path,
+    /// Volume photon mapping, single scattering by shadow rays (the paper).
+    Vpm,
+    /// Volume photon mapping, every scattering event in the map.
+    VpmFull,
+    /// Reference volumetric path tracer.
+    Volpath,
+    /// The same, with next-event estimation also through flat refracting faces (planar_nee.rs):
+    /// same expectation, a faster reference where light enters media through flat faces.
+    VolpathNee,
+    /// Progressive photon mapping.
+    Ppm,
+}
+
+impl Integrator {
+    /// Parse the contract's name (`"pm"`, `"path"`, `"vpm"`, `"vpm-full"`, `"volpath"`,
+    /// `"volpath-nee"`, `"ppm"`).
+    pub fn parse(name: &str) -> Result<Self> {
+        Ok(match name {
+            "pm" => Integrator::Pm,
+            "path" => Integrator::Path,
+            "vpm" => Integrator::Vpm,
+            "vpm-full" => Integrator::VpmFull,
+            "volpath" => Integrator::Volpath,
+            "volpath-nee" => Integrator::VolpathNee,
+            "ppm" => Integrator::Ppm,
+            other => {
+                return Err(Error::InvalidInput(format!(
+                    "settings.integrator = {other:?}: allowed \"pm\", \"path\", \"vpm\", \"vpm-full\", \"volpath\", \"volpath-nee\", \"ppm\""
+                )))
+            }
+        })
+    }
+}
+
+/// Default of [`Settings::aim`]: emit as the lights do. Aiming is opt-in because it changes
+/// how many photons a given `volume_photons` stores (and so memory and time): on the 5 mm
+/// Fig. 3 disc at aim 0.5, 21× more (2.7 M → 56 M from 5 M photons).
+pub const DEFAULT_AIM: f64 = 0.0;
+
+/// Render settings (see docs/render-contract.md; `None` = derive from the scene).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// The integrator.
+    pub integrator: Integrator,
+    /// Camera samples per pixel (≥ 1).
+    pub spp: u32,
+    /// Photons emitted for the surface photon map.
+    pub photons: u64,
+    /// Photons emitted for the volume photon maps (with `volume_stored`: at most this many).
+    pub volume_photons: u64,
+    /// Photons the volume maps of a pass should hold (0: no budget). Photons are emitted until
+    /// the maps hold at least this many (the paper counts its
+    /// 100 000 000 photons this way) or `volume_photons` have been emitted; powers are
+    /// normalised by the number actually emitted.
+    pub volume_stored: u64,
+    /// Fraction of the volume pass's photons aimed at the scattering media's bounding
+    /// spheres, in [0, 1) (`integrators::aim`; unbiased mixture). 0: emit as the lights do.
+    pub aim: f64,
+    /// Photons per density estimate.
+    pub k: usize,
+    /// Largest gathering radius [mm].
+    pub radius: Option<f64>,
+    /// Ray-marching step [mm].
+    pub step: Option<f64>,
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Band index (mixed into the streams only).
+    pub band: u64,
+    /// Longest path (bounces / boundary events).
+    pub max_depth: u32,
+    /// Progressive photon mapping passes.
+    pub passes: u32,
+    /// Progressive photon mapping radius reduction α in (0, 1).
+    pub alpha: f64,
+    /// First pass to render, 0-based: `ppm` renders passes `pass_index + 1 ..= pass_index +
+    /// passes` of its schedule (one task per pass for distributed renders); other
+    /// integrators draw from an independent seed stream per pass index (0 = the plain seed).
+    pub pass_index: u32,
+    /// `pm`: final gathering (one diffuse bounce before the density estimate).
+    pub final_gather: bool,
+    /// `vpm`, `vpm-full`, `ppm`: half-height of the boundary-aligned layer kernel over the
+    /// gathering radius, in [0, 1]; 0 the sphere (see `VpmParams::layer`).
+    pub kernel_layer: f64,
+    /// `vpm`, `vpm-full`, `ppm`: clip the layer kernel (and vpm's surface disc) by every
+    /// other face within it, not only the camera ray's entry and exit planes (see
+    /// `VpmParams::clip`).
+    pub kernel_clip: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            integrator: Integrator::Pm,
+            spp: 16,
+            photons: 200_000,
+            volume_photons: 1_000_000,
+            volume_stored: 0,
+            aim: DEFAULT_AIM,
+            k: 64,
+            radius: None,
+            step: None,
+            seed: 1,
+            band: 0,
+            max_depth: 64,
+            passes: 1,
+            alpha: 0.7,
+            pass_index: 0,
+            final_gather: false,
+            kernel_layer: DEFAULT_LAYER,
+            kernel_clip: DEFAULT_CLIP,
+        }
+    }
+}
+
+impl Settings {
+    /// Check ranges; errors name `settings.<key>`.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |k: &str, msg: &str| Err(Error::InvalidInput(format!("settings.{k} {msg}")));
+        if self.spp == 0 {
+            return bad("spp", "= 0 is out of range: allowed ≥ 1");
+        }
+        if self.k == 0 {
+            return bad("k", "= 0 is out of range: allowed ≥ 1");
+        }
+        if self.max_depth == 0 {
+            return bad("max_depth", "= 0 is out of range: allowed ≥ 1");
+        }
+        if self.passes == 0 {
+            return bad("passes", "= 0 is out of range: allowed ≥ 1");
+        }
+        // pass numbers live in PASS_BITS bits of the seeds (rng::pass_seed, tiles::film_key)
+        let last = self.pass_index as u64 + self.passes as u64;
+        if last >= MAX_PASSES as u64 {
+            return Err(Error::InvalidInput(format!(
+                "settings.pass_index + settings.passes = {last} is out of range: allowed [1, {}]",
+                MAX_PASSES - 1
+            )));
+        }
+        for (k, v) in [("radius", self.radius), ("step", self.step)] {
+            if let Some(v) = v {
+                crate::error::check_positive(&format!("settings.{k}"), v, "mm")?;
+            }
+        }
+        crate::error::check_range("settings.alpha", self.alpha, 0.0, true, 1.0, true, "")?;
+        crate::error::check_range("settings.aim", self.aim, 0.0, false, 1.0, true, "")?;
+        crate::error::check_range(
+            "settings.kernel_layer",
+            self.kernel_layer,
+            0.0,
+            false,
+            1.0,
+            false,
+            "",
+        )
+    }
+}
+
+/// What a render measured besides the image.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Stats {
+    /// Integrator name as in the contract.
+    pub integrator: String,
+    /// Wall-clock seconds of the whole band.
+    pub seconds_total: f64,
+    /// Seconds tracing photons.
+    pub seconds_photons: f64,
+    /// Seconds building photon-map kd-trees.
+    pub seconds_build: f64,
+    /// Seconds of the camera pass.
+    pub seconds_camera: f64,
+    /// Photons emitted.
+    pub photons_emitted: u64,
+    /// Photons stored (all maps).
+    pub photons_stored: u64,
+    /// Bytes per stored photon.
+    pub bytes_per_photon: u64,
+    /// Memory of all photon maps [bytes].
+    pub photon_map_bytes: u64,
+    /// Surface gathering radius in use [mm] (0 when none).
+    pub radius: f64,
+    /// Rays traced by the camera pass (intersection and shadow queries).
+    pub rays: u64,
+    /// Camera samples per pixel.
+    pub spp: u32,
+    /// Integrator-specific figures (name, value).
+    pub extra: Vec<(String, f64)>,
+}
