@@ -204,7 +204,7 @@ fn ledger_surface_map_in_closed_sphere() {
     for d in dirs {
         let e = maps
             .surface
-            .surface_irradiance(d * 10.0, -d, 200, 5.0, &mut nb);
+            .irradiance_disc_knn(d * 10.0, -d, 200, 5.0, &mut nb);
         sum += e.value;
     }
     let m = sum / 6.0;
