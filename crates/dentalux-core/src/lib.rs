@@ -14,6 +14,7 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod contract;
 pub mod control;
 pub mod error;
 pub mod film;

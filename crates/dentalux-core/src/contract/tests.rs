@@ -1,0 +1,164 @@
+//! The decoder's rules: a valid scene and settings decode; bad input is refused with the key
+//! path, unknown keys with the list of allowed ones (the messages Python users see).
+
+use super::*;
+use serde_json::json;
+
+/// A diffuse plane z = 0 under a point light, camera looking down (as tests/test_render_band.py).
+fn plane_scene() -> Value {
+    json!({
+        "camera": {"position": [0, 0, 10], "look_at": [0, 0, 0], "up": [0, 1, 0],
+                   "fov_deg": 30.0, "width": 12, "height": 8},
+        "ambient_medium": 0,
+        "media": [{"name": "air", "mua": 0.0, "mus": 0.0, "n": 1.0,
+                   "phase": {"g": 0.0, "fd": 0.0, "lobes": null}}],
+        "surfaces": [{"type": "lambertian", "reflectance": 0.5}],
+        "shapes": [{"type": "quad", "corner": [-50, -50, 0], "u": [100, 0, 0],
+                    "v": [0, 100, 0], "boundary": {"kind": "opaque", "surface": 0}}],
+        "lights": [{"type": "point", "position": [0, 0, 5], "intensity": 20.0}],
+    })
+}
+
+/// The error message of decoding `scene` (panics if it decodes).
+fn scene_error(scene: &Value) -> String {
+    match scene_from_json(&scene.to_string()) {
+        Ok(_) => panic!("decoded: {scene}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// The error message of decoding `settings` (panics if it decodes).
+fn settings_error(settings: Value) -> String {
+    match settings_from_json(&settings.to_string()) {
+        Ok(_) => panic!("decoded: {settings}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn a_valid_scene_decodes() {
+    let scene = scene_from_json(&plane_scene().to_string()).unwrap();
+    assert_eq!((scene.camera.width, scene.camera.height), (12, 8));
+    assert_eq!(
+        (scene.media.len(), scene.shapes.len(), scene.lights.len()),
+        (1, 1, 1)
+    );
+}
+
+/// A change to a valid scene.
+type Edit = fn(&mut Value);
+
+#[test]
+fn bad_scenes_name_the_key() {
+    let cases: Vec<(Edit, &str)> = vec![
+        (
+            |s| s["shapes"][0]["colour"] = json!(1),
+            "shapes[0].colour: unknown key; allowed: boundary, corner, transform, type, u, v",
+        ),
+        (
+            |s| s["shapes"][0]["boundary"]["surface"] = json!(3),
+            "shapes[0].boundary.surface = 3 is out of range: 1 surfaces defined (indices 0..1)",
+        ),
+        (
+            |s| s["camera"]["fov_deg"] = json!("wide"),
+            "camera.fov_deg: expected a finite number, got a string",
+        ),
+        (
+            |s| {
+                s["camera"]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("up")
+                    .map(drop)
+                    .unwrap()
+            },
+            "camera.up is missing (required)",
+        ),
+        (
+            |s| s["lights"][0]["type"] = json!("laser"),
+            "lights[0].type: \"laser\": allowed \"quad\", \"disc\", \"point\", \"spot\"",
+        ),
+        (
+            |s| s["shapes"][0]["corner"] = json!([0, 0]),
+            "shapes[0].corner: expected a list of 3 numbers, got 2 entries",
+        ),
+        (
+            |s| s["ambient_medium"] = json!(2),
+            "ambient_medium = 2 is out of range: 1 media defined",
+        ),
+        (
+            |s| s["media"][0]["phase"]["g"] = json!(1.5),
+            "media[0].phase.g",
+        ),
+        (|s| s["media"][0]["mua"] = json!(-1.0), "media[0].mua"),
+    ];
+    for (edit, message) in cases {
+        let mut scene = plane_scene();
+        edit(&mut scene);
+        let got = scene_error(&scene);
+        assert!(got.contains(message), "{got:?} lacks {message:?}");
+    }
+}
+
+#[test]
+fn malformed_json_is_refused() {
+    let got = scene_from_json("{").err().unwrap().to_string();
+    assert!(got.starts_with("scene JSON is malformed"), "{got}");
+    let got = settings_from_json("[1").err().unwrap().to_string();
+    assert!(got.starts_with("settings JSON is malformed"), "{got}");
+    let got = camera_from_json("").err().unwrap().to_string();
+    assert!(got.starts_with("camera JSON is malformed"), "{got}");
+}
+
+#[test]
+fn settings_default_to_the_cores_and_name_bad_keys() {
+    let (s, threads) = settings_from_json("{}").unwrap();
+    assert_eq!((s, threads), (Settings::default(), None));
+    let (s, threads) =
+        settings_from_json(r#"{"integrator": "vpm-full", "spp": 3, "threads": 2}"#).unwrap();
+    assert_eq!(
+        (s.integrator, s.spp, threads),
+        (Integrator::VpmFull, 3, Some(2))
+    );
+    for (settings, message) in [
+        (
+            json!({"integrator": "magic"}),
+            "settings.integrator = \"magic\": allowed",
+        ),
+        (
+            json!({"spp": 0}),
+            "settings.spp = 0 is out of range: allowed ≥ 1",
+        ),
+        (json!({"radius": -1.0}), "settings.radius"),
+        (
+            json!({"sp": 3}),
+            "settings.sp: unknown key; allowed: aim, alpha,",
+        ),
+        (
+            json!({"kernel_clip": 1}),
+            "settings.kernel_clip: expected true or false, got a number",
+        ),
+        (
+            json!({"spp": 1u64 << 33}),
+            "settings.spp = 8589934592 is too large",
+        ),
+        (
+            json!({"seed": -1}),
+            "settings.seed: expected a non-negative integer, got -1",
+        ),
+    ] {
+        let got = settings_error(settings);
+        assert!(got.contains(message), "{got:?} lacks {message:?}");
+    }
+}
+
+#[test]
+fn the_camera_decodes_alone() {
+    let cam = camera_from_json(&plane_scene()["camera"].to_string()).unwrap();
+    assert_eq!((cam.width, cam.height), (12, 8));
+    let got = camera_from_json(r#"{"position": [0, 0, 1]}"#)
+        .err()
+        .unwrap()
+        .to_string();
+    assert_eq!(got, "camera.look_at is missing (required)");
+}
