@@ -22,6 +22,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(slab::phase_eval, m)?)?;
     m.add_function(wrap_pyfunction!(render::render_band, m)?)?;
     m.add_function(wrap_pyfunction!(render::camera_project, m)?)?;
+    m.add_function(wrap_pyfunction!(render::settings_schema, m)?)?;
+    m.add_function(wrap_pyfunction!(render::photons_traced, m)?)?;
     m.add_function(wrap_pyfunction!(panic_in_worker, m)?)?;
     Ok(())
 }

@@ -1,9 +1,10 @@
-//! Binding of `render_band` and `camera_project`: the JSON strings of the render contract
+//! Binding of `render_band`, `camera_project`, `settings_schema` and `photons_traced`: the JSON strings of the render contract
 //! (docs/render-contract.md) go to the core's decoder ([`dentalux_core::contract`]), the band
 //! is rendered off the GIL through [`runner::run`], and the image and statistics come back as
 //! numpy and a dict.
 
 use crate::runner;
+use dentalux_core::contract::settings_schema as core_settings_schema;
 use dentalux_core::contract::{camera_from_json, scene_from_json, settings_from_json};
 use dentalux_core::geometry::Vec3;
 use dentalux_core::integrators::render::render_band as core_render;
@@ -66,4 +67,19 @@ pub fn render_band<'py>(
         .reshape([h, w])
         .map_err(|e| PyValueError::new_err(format!("image shape: {e}")))?;
     Ok((arr.into_any(), stats_dict(py, &stats)?))
+}
+
+/// The settings' schema as JSON (integrator names, keys with defaults and ranges, the pass
+/// bound): what Python validates user input against.
+#[pyfunction]
+pub fn settings_schema() -> String {
+    core_settings_schema()
+}
+
+/// Photons one pass of one band traces with the settings in `settings_json` (the progress
+/// count's unit besides pixels).
+#[pyfunction]
+pub fn photons_traced(settings_json: &str) -> PyResult<u64> {
+    let (settings, _) = settings_from_json(settings_json).map_err(runner::to_py_err)?;
+    Ok(settings.photons_traced())
 }

@@ -11,14 +11,14 @@ use crate::error::Error;
 use crate::geometry::mesh::TriangleMesh;
 use crate::geometry::shapes::{BoxShape, Cylinder, Quad, Sphere};
 use crate::geometry::transform::Transform;
-use crate::integrators::settings::{Integrator, Settings};
+use crate::integrators::settings::{Integrator, Range, Settings, KEYS, MAX_PASSES};
 use crate::lights::Light;
 use crate::medium::Medium;
 use crate::phase::PhaseFunction;
 use crate::scene::{Boundary, Geometry, Scene, ShapeInstance};
 use crate::surface::{Mapping, Surface};
 use json::{bad, list_of, Node, Obj, R};
-use serde_json::Value;
+use serde_json::{json, Value};
 
 fn camera(mut o: Obj) -> R<Camera> {
     let c = Camera::new(
@@ -370,6 +370,67 @@ pub fn camera_from_json(camera_json: &str) -> R<Camera> {
     }
     .obj()
     .and_then(camera)
+}
+
+/// The settings' schema, as JSON, for the layer where user input comes in (Python's
+/// scene/schema.py validates against it): the integrators (and which photons they trace),
+/// every key of [`KEYS`] in order with its default ([`Settings::default`]) and range, and
+/// the pass bound [`MAX_PASSES`].
+pub fn settings_schema() -> String {
+    let d = Settings::default();
+    let default = |name: &str| -> Value {
+        match name {
+            "integrator" => json!(d.integrator.name()),
+            "spp" => json!(d.spp),
+            "photons" => json!(d.photons),
+            "volume_photons" => json!(d.volume_photons),
+            "volume_stored" => json!(d.volume_stored),
+            "aim" => json!(d.aim),
+            "k" => json!(d.k),
+            "radius" => json!(d.radius),
+            "step" => json!(d.step),
+            "seed" => json!(d.seed),
+            "band" => json!(d.band),
+            "max_depth" => json!(d.max_depth),
+            "passes" => json!(d.passes),
+            "alpha" => json!(d.alpha),
+            "pass_index" => json!(d.pass_index),
+            "final_gather" => json!(d.final_gather),
+            "kernel_layer" => json!(d.kernel_layer),
+            "kernel_clip" => json!(d.kernel_clip),
+            _ => Value::Null,
+        }
+    };
+    let keys: Vec<Value> = KEYS
+        .iter()
+        .map(|k| {
+            let mut v = match k.range {
+                Range::Integer { lo } => json!({"kind": "integer", "lo": lo}),
+                Range::Real {
+                    lo,
+                    lo_open,
+                    hi,
+                    hi_open,
+                } => json!({"kind": "real", "lo": lo, "lo_open": lo_open, "hi": hi,
+                            "hi_open": hi_open}),
+                Range::Positive => json!({"kind": "positive", "unit": "mm"}),
+                Range::Boolean => json!({"kind": "boolean"}),
+                Range::Integrator => json!({"kind": "integrator"}),
+            };
+            v["name"] = json!(k.name);
+            v["default"] = default(k.name);
+            v["scene"] = json!(k.scene);
+            v
+        })
+        .collect();
+    let integrators: Vec<Value> = Integrator::ALL
+        .iter()
+        .map(|(i, name)| {
+            json!({"name": name, "traces_photons": i.traces_photons(),
+                   "traces_volume_photons": i.traces_volume_photons()})
+        })
+        .collect();
+    json!({"integrators": integrators, "keys": keys, "max_passes": MAX_PASSES}).to_string()
 }
 
 #[cfg(test)]

@@ -162,3 +162,61 @@ fn the_camera_decodes_alone() {
         .to_string();
     assert_eq!(got, "camera.look_at is missing (required)");
 }
+
+#[test]
+fn the_schema_lists_every_key_with_the_cores_defaults() {
+    let schema: Value = serde_json::from_str(&settings_schema()).unwrap();
+    let keys = schema["keys"].as_array().unwrap();
+    assert_eq!(keys.len(), KEYS.len());
+    let get = |name: &str| keys.iter().find(|k| k["name"] == name).unwrap().clone();
+    let d = Settings::default();
+    assert_eq!(get("spp")["default"], json!(d.spp));
+    assert_eq!(get("spp")["lo"], json!(1));
+    assert_eq!(get("kernel_layer")["default"], json!(d.kernel_layer));
+    assert_eq!(get("alpha")["lo_open"], json!(true));
+    assert_eq!(get("radius")["default"], Value::Null);
+    assert_eq!(schema["max_passes"], json!(MAX_PASSES));
+    let names: Vec<&str> = (schema["integrators"].as_array().unwrap().iter())
+        .map(|i| i["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "pm",
+            "path",
+            "vpm",
+            "vpm-full",
+            "volpath",
+            "volpath-nee",
+            "ppm"
+        ]
+    );
+    // every key the schema names is one the decoder reads: a settings object of all the
+    // defaults decodes to the default settings
+    let all: serde_json::Map<String, Value> = keys
+        .iter()
+        .map(|k| {
+            (
+                k["name"].as_str().unwrap().to_string(),
+                k["default"].clone(),
+            )
+        })
+        .collect();
+    let (s, threads) = settings_from_json(&Value::Object(all).to_string()).unwrap();
+    assert_eq!((s, threads), (d, None));
+}
+
+#[test]
+fn photons_traced_follows_the_integrator() {
+    let s = |integrator, volume_stored| Settings {
+        integrator,
+        photons: 10,
+        volume_photons: 100,
+        volume_stored,
+        ..Settings::default()
+    };
+    assert_eq!(s(Integrator::Path, 0).photons_traced(), 0);
+    assert_eq!(s(Integrator::Pm, 0).photons_traced(), 10);
+    assert_eq!(s(Integrator::Vpm, 0).photons_traced(), 110);
+    assert_eq!(s(Integrator::Ppm, 40).photons_traced(), 50);
+}

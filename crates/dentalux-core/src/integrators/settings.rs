@@ -39,23 +39,54 @@ pub enum Integrator {
 }
 
 impl Integrator {
-    /// Parse the contract's name (`"pm"`, `"path"`, `"vpm"`, `"vpm-full"`, `"volpath"`,
-    /// `"volpath-nee"`, `"ppm"`).
+    /// Every integrator with its contract name, in the order the docs list them.
+    pub const ALL: [(Integrator, &'static str); 7] = [
+        (Integrator::Pm, "pm"),
+        (Integrator::Path, "path"),
+        (Integrator::Vpm, "vpm"),
+        (Integrator::VpmFull, "vpm-full"),
+        (Integrator::Volpath, "volpath"),
+        (Integrator::VolpathNee, "volpath-nee"),
+        (Integrator::Ppm, "ppm"),
+    ];
+
+    /// The contract's name (`"vpm-full"`).
+    pub fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(i, _)| *i == self)
+            .map_or("", |(_, n)| n)
+    }
+
+    /// Parse the contract's name (one of [`Self::ALL`]).
     pub fn parse(name: &str) -> Result<Self> {
-        Ok(match name {
-            "pm" => Integrator::Pm,
-            "path" => Integrator::Path,
-            "vpm" => Integrator::Vpm,
-            "vpm-full" => Integrator::VpmFull,
-            "volpath" => Integrator::Volpath,
-            "volpath-nee" => Integrator::VolpathNee,
-            "ppm" => Integrator::Ppm,
-            other => {
-                return Err(Error::InvalidInput(format!(
-                    "settings.integrator = {other:?}: allowed \"pm\", \"path\", \"vpm\", \"vpm-full\", \"volpath\", \"volpath-nee\", \"ppm\""
+        match Self::ALL.iter().find(|(_, n)| *n == name) {
+            Some((i, _)) => Ok(*i),
+            None => {
+                let allowed: Vec<String> =
+                    Self::ALL.iter().map(|(_, n)| format!("{n:?}")).collect();
+                Err(Error::InvalidInput(format!(
+                    "settings.integrator = {name:?}: allowed {}",
+                    allowed.join(", ")
                 )))
             }
-        })
+        }
+    }
+
+    /// Whether it traces photons (all but the path tracers).
+    pub fn traces_photons(self) -> bool {
+        !matches!(
+            self,
+            Integrator::Path | Integrator::Volpath | Integrator::VolpathNee
+        )
+    }
+
+    /// Whether it traces volume photons (`vpm`, `vpm-full`, `ppm`).
+    pub fn traces_volume_photons(self) -> bool {
+        matches!(
+            self,
+            Integrator::Vpm | Integrator::VpmFull | Integrator::Ppm
+        )
     }
 }
 
@@ -139,21 +170,111 @@ impl Default for Settings {
     }
 }
 
+/// The values a setting may take (what [`Settings::validate`] and the Python schema check).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Range {
+    /// An integer ≥ `lo`.
+    Integer {
+        /// Smallest allowed value.
+        lo: u64,
+    },
+    /// A real number between `lo` and `hi`, each end open or closed.
+    Real {
+        /// Lower end.
+        lo: f64,
+        /// Whether `lo` itself is excluded.
+        lo_open: bool,
+        /// Upper end.
+        hi: f64,
+        /// Whether `hi` itself is excluded.
+        hi_open: bool,
+    },
+    /// A length > 0 [mm], or absent (derived from the scene).
+    Positive,
+    /// true or false.
+    Boolean,
+    /// One of [`Integrator::ALL`]'s names.
+    Integrator,
+}
+
+/// One key of the settings: its name, its allowed values, and whether a scene's `[render]`
+/// table may set it (the rest are per call: `pass_index`, `band`, `threads`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Key {
+    /// The contract's key.
+    pub name: &'static str,
+    /// Allowed values.
+    pub range: Range,
+    /// Settable in a scene's `[render]` table.
+    pub scene: bool,
+}
+
+const fn key(name: &'static str, range: Range, scene: bool) -> Key {
+    Key { name, range, scene }
+}
+const fn at_least(lo: u64) -> Range {
+    Range::Integer { lo }
+}
+/// Real numbers in [0, 1) (`aim`), (0, 1) (`alpha`), [0, 1] (`kernel_layer`).
+const fn unit_interval(lo_open: bool, hi_open: bool) -> Range {
+    Range::Real {
+        lo: 0.0,
+        lo_open,
+        hi: 1.0,
+        hi_open,
+    }
+}
+
+/// Every key of the settings contract, in the order the docs and error messages list them.
+/// Defaults are [`Settings::default`]'s; `threads` (worker threads, default all cores) is
+/// read by the contract decoder, not stored in [`Settings`].
+pub const KEYS: [Key; 19] = [
+    key("integrator", Range::Integrator, true),
+    key("spp", at_least(1), true),
+    key("photons", at_least(0), true),
+    key("volume_photons", at_least(0), true),
+    key("volume_stored", at_least(0), true),
+    key("aim", unit_interval(false, true), true),
+    key("k", at_least(1), true),
+    key("radius", Range::Positive, true),
+    key("step", Range::Positive, true),
+    key("seed", at_least(0), true),
+    key("max_depth", at_least(1), true),
+    key("passes", at_least(1), true),
+    key("alpha", unit_interval(true, true), true),
+    key("final_gather", Range::Boolean, true),
+    key("kernel_layer", unit_interval(false, false), true),
+    key("kernel_clip", Range::Boolean, true),
+    key("pass_index", at_least(0), false),
+    key("band", at_least(0), false),
+    key("threads", at_least(1), false),
+];
+
+/// The range of `name` in [`KEYS`].
+fn range_of(name: &str) -> Range {
+    KEYS.iter()
+        .find(|k| k.name == name)
+        .map_or(Range::Positive, |k| k.range)
+}
+
 impl Settings {
-    /// Check ranges; errors name `settings.<key>`.
+    /// Check ranges ([`KEYS`]); errors name `settings.<key>`. Input from Python was checked
+    /// against the same table where it came in (scene/schema.py): this is the core's guard
+    /// for every other caller.
     pub fn validate(&self) -> Result<()> {
-        let bad = |k: &str, msg: &str| Err(Error::InvalidInput(format!("settings.{k} {msg}")));
-        if self.spp == 0 {
-            return bad("spp", "= 0 is out of range: allowed ≥ 1");
-        }
-        if self.k == 0 {
-            return bad("k", "= 0 is out of range: allowed ≥ 1");
-        }
-        if self.max_depth == 0 {
-            return bad("max_depth", "= 0 is out of range: allowed ≥ 1");
-        }
-        if self.passes == 0 {
-            return bad("passes", "= 0 is out of range: allowed ≥ 1");
+        for (k, v) in [
+            ("spp", self.spp as u64),
+            ("k", self.k as u64),
+            ("max_depth", self.max_depth as u64),
+            ("passes", self.passes as u64),
+        ] {
+            if let Range::Integer { lo } = range_of(k) {
+                if v < lo {
+                    return Err(Error::InvalidInput(format!(
+                        "settings.{k} = {v} is out of range: allowed ≥ {lo}"
+                    )));
+                }
+            }
         }
         // pass numbers live in PASS_BITS bits of the seeds (rng::pass_seed, tiles::film_key)
         let last = self.pass_index as u64 + self.passes as u64;
@@ -168,17 +289,44 @@ impl Settings {
                 crate::error::check_positive(&format!("settings.{k}"), v, "mm")?;
             }
         }
-        crate::error::check_range("settings.alpha", self.alpha, 0.0, true, 1.0, true, "")?;
-        crate::error::check_range("settings.aim", self.aim, 0.0, false, 1.0, true, "")?;
-        crate::error::check_range(
-            "settings.kernel_layer",
-            self.kernel_layer,
-            0.0,
-            false,
-            1.0,
-            false,
-            "",
-        )
+        for (k, v) in [
+            ("alpha", self.alpha),
+            ("aim", self.aim),
+            ("kernel_layer", self.kernel_layer),
+        ] {
+            if let Range::Real {
+                lo,
+                lo_open,
+                hi,
+                hi_open,
+            } = range_of(k)
+            {
+                let field = format!("settings.{k}");
+                crate::error::check_range(&field, v, lo, lo_open, hi, hi_open, "")?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Photons one pass of one band traces: the unit of the progress count besides pixels
+    /// (`control.done()` reaches this + width × height). None for the path tracers, the
+    /// surface photons for `pm`, and for the volume integrators also the volume photons
+    /// (those stored when `volume_stored` sets a budget: emission then stops at the budget).
+    pub fn photons_traced(&self) -> u64 {
+        if !self.integrator.traces_photons() {
+            return 0;
+        }
+        let volume = if self.volume_stored > 0 {
+            self.volume_stored
+        } else {
+            self.volume_photons
+        };
+        self.photons
+            + if self.integrator.traces_volume_photons() {
+                volume
+            } else {
+                0
+            }
     }
 }
 
