@@ -83,12 +83,13 @@ def colour_inputs(scene: Scene, bands: list[float]) -> tuple[np.ndarray, str, fl
 
 def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None = None,
                          scene_file: str | None = None, warn=None,
-                         white: float | None = None) -> dict:
+                         white: float | None = None, write_json: bool = True) -> dict:
     """Write radiance.npy, previews, colour images and render.json for a RenderResult;
     returns the render.json dictionary. ``white``: the radiance (relative to the light's
     spectrum) that counts as L* = 100, e.g. a white tile measured in the same geometry; the
     image is then exposed so that this white is display white. Default: the brightest
-    light's radiance, with automatic exposure."""
+    light's radiance, with automatic exposure. ``write_json=False`` leaves render.json to a
+    caller that adds to the dictionary first (it is then written once)."""
     from dentalux.color import write_images
 
     out = Path(out)
@@ -126,5 +127,6 @@ def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None =
         if warn:
             warn(f"warning: no colour image: {exc}")
     summary["peak_memory_bytes"] = peak_memory_bytes()
-    (out / "render.json").write_text(dumps_strict(summary, indent=2))
+    if write_json:
+        (out / "render.json").write_text(dumps_strict(summary, indent=2))
     return summary

@@ -121,7 +121,7 @@ def render_command(
     warn = None if as_json else (lambda msg: print(msg, file=sys.stderr))
     with staged_dir(out, "--out") as stage:
         summary = write_render_outputs(scene, result, stage, scene_file=str(scene_file),
-                                       warn=warn)
+                                       warn=warn, write_json=False)
         summary = rebase(summary, stage, out)
         if progressive:
             summary["progressive"] = _finite(result.stats["progressive"])
