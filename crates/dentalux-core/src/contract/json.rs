@@ -159,27 +159,29 @@ impl Obj<'_> {
         let (v, p) = self.req(k)?;
         Node { v, path: &p }.num()
     }
-    pub(super) fn num_or(&mut self, k: &'static str, default: f64) -> R<f64> {
+    /// `read` of the value at `k`, or None when it is absent or null.
+    pub(super) fn opt_with<T>(
+        &mut self,
+        k: &'static str,
+        read: impl FnOnce(Node<'_>) -> R<T>,
+    ) -> R<Option<T>> {
         match self.opt(k) {
-            Some((v, p)) => Node { v, path: &p }.num(),
-            None => Ok(default),
-        }
-    }
-    pub(super) fn opt_num(&mut self, k: &'static str) -> R<Option<f64>> {
-        match self.opt(k) {
-            Some((v, p)) => Node { v, path: &p }.num().map(Some),
+            Some((v, p)) => read(Node { v, path: &p }).map(Some),
             None => Ok(None),
         }
+    }
+    pub(super) fn num_or(&mut self, k: &'static str, default: f64) -> R<f64> {
+        Ok(self.opt_with(k, |n| n.num())?.unwrap_or(default))
+    }
+    pub(super) fn opt_num(&mut self, k: &'static str) -> R<Option<f64>> {
+        self.opt_with(k, |n| n.num())
     }
     pub(super) fn uint(&mut self, k: &'static str) -> R<u64> {
         let (v, p) = self.req(k)?;
         Node { v, path: &p }.uint()
     }
     pub(super) fn uint_or(&mut self, k: &'static str, default: u64) -> R<u64> {
-        match self.opt(k) {
-            Some((v, p)) => Node { v, path: &p }.uint(),
-            None => Ok(default),
-        }
+        Ok(self.opt_with(k, |n| n.uint())?.unwrap_or(default))
     }
     pub(super) fn index(&mut self, k: &'static str, len: usize, what: &str) -> R<u32> {
         let (v, p) = self.req(k)?;

@@ -20,6 +20,16 @@ use crate::surface::{Mapping, Surface};
 use json::{bad, list_of, Node, Obj, R};
 use serde_json::{json, Value};
 
+/// The error for an unknown `type` of the object `o`, listing the allowed ones.
+fn unknown_type<T>(o: &Obj, other: &str, allowed: &[&str]) -> R<T> {
+    let allowed: Vec<String> = allowed.iter().map(|a| format!("{a:?}")).collect();
+    bad(format!(
+        "{}: {other:?}: allowed {}",
+        o.key("type"),
+        allowed.join(", ")
+    ))
+}
+
 fn camera(mut o: Obj) -> R<Camera> {
     let c = Camera::new(
         o.vec3("position")?,
@@ -98,12 +108,7 @@ fn surface(mut o: Obj) -> R<Surface> {
             }
         }
         "black" => Surface::Black,
-        other => {
-            return bad(format!(
-                "{}: {other:?}: allowed \"lambertian\", \"checker\", \"image\", \"black\"",
-                o.key("type")
-            ))
-        }
+        other => return unknown_type(&o, other, &["lambertian", "checker", "image", "black"]),
     };
     s.validate(&o.path)?;
     o.done()?;
@@ -213,10 +218,8 @@ fn shape(mut o: Obj, n_surfaces: usize, n_media: usize) -> R<ShapeInstance> {
             })
         }
         other => {
-            return bad(format!(
-                "{}: {other:?}: allowed \"sphere\", \"quad\", \"box\", \"cylinder\", \"mesh\"",
-                o.key("type")
-            ))
+            let allowed = ["sphere", "quad", "box", "cylinder", "mesh"];
+            return unknown_type(&o, other, &allowed);
         }
     };
     let path = o.path.clone();
@@ -254,12 +257,7 @@ fn light(mut o: Obj) -> R<Light> {
                 o.num_or("falloff_deg", 0.0)?,
             )?
         }
-        other => {
-            return bad(format!(
-                "{}: {other:?}: allowed \"quad\", \"disc\", \"point\", \"spot\"",
-                o.key("type")
-            ))
-        }
+        other => return unknown_type(&o, other, &["quad", "disc", "point", "spot"]),
     };
     l.validate(&o.path)?;
     o.done()?;
@@ -341,20 +339,11 @@ pub fn settings_from_json(text: &str) -> R<(Settings, Option<usize>)> {
         passes: to_u32("passes", o.uint_or("passes", d.passes as u64)?)?,
         alpha: o.num_or("alpha", d.alpha)?,
         pass_index: to_u32("pass_index", o.uint_or("pass_index", d.pass_index as u64)?)?,
-        final_gather: match o.opt("final_gather") {
-            Some((v, p)) => Node { v, path: &p }.boolean()?,
-            None => d.final_gather,
-        },
+        final_gather: (o.opt_with("final_gather", |n| n.boolean())?).unwrap_or(d.final_gather),
         kernel_layer: o.num_or("kernel_layer", d.kernel_layer)?,
-        kernel_clip: match o.opt("kernel_clip") {
-            Some((v, p)) => Node { v, path: &p }.boolean()?,
-            None => d.kernel_clip,
-        },
+        kernel_clip: (o.opt_with("kernel_clip", |n| n.boolean())?).unwrap_or(d.kernel_clip),
     };
-    let threads = match o.opt("threads") {
-        Some((v, p)) => Some(Node { v, path: &p }.uint()? as usize),
-        None => None,
-    };
+    let threads = o.opt_with("threads", |n| n.uint())?.map(|t| t as usize);
     o.done()?;
     s.validate()?;
     Ok((s, threads))

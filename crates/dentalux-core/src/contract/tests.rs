@@ -1,21 +1,26 @@
-//! The decoder's rules: a valid scene and settings decode; bad input is refused with the key
+//! The decoder's rules (tests/test_render_band.py checks the same through the binding): a valid scene and settings decode; bad input is refused with the key
 //! path, unknown keys with the list of allowed ones (the messages Python users see).
 
 use super::*;
 use serde_json::json;
 
-/// A diffuse plane z = 0 under a point light, camera looking down (as tests/test_render_band.py).
-fn plane_scene() -> Value {
+/// A glass sphere in air on a checker floor under a disc light, camera looking down.
+fn sphere_scene() -> Value {
+    let camera = json!({"position": [0, 0, 10], "look_at": [0, 0, 0], "up": [0, 1, 0],
+                        "fov_deg": 30.0, "width": 12, "height": 8});
+    let glass = json!({"name": "glass", "mua": 0.01, "mus": 0.0, "n": 1.5});
+    let sphere = json!({"type": "sphere", "center": [0, 0, 1], "radius": 1.0,
+                        "boundary": {"kind": "dielectric", "inside": 1, "outside": 0}});
+    let floor = json!({"type": "quad", "corner": [-50, -50, 0], "u": [100, 0, 0],
+                       "v": [0, 100, 0], "boundary": {"kind": "opaque", "surface": 0}});
+    let light = json!({"type": "disc", "center": [0, 0, 8], "normal": [0, 0, -1],
+                       "radius": 2.0, "radiance": 5.0});
     json!({
-        "camera": {"position": [0, 0, 10], "look_at": [0, 0, 0], "up": [0, 1, 0],
-                   "fov_deg": 30.0, "width": 12, "height": 8},
-        "ambient_medium": 0,
-        "media": [{"name": "air", "mua": 0.0, "mus": 0.0, "n": 1.0,
-                   "phase": {"g": 0.0, "fd": 0.0, "lobes": null}}],
-        "surfaces": [{"type": "lambertian", "reflectance": 0.5}],
-        "shapes": [{"type": "quad", "corner": [-50, -50, 0], "u": [100, 0, 0],
-                    "v": [0, 100, 0], "boundary": {"kind": "opaque", "surface": 0}}],
-        "lights": [{"type": "point", "position": [0, 0, 5], "intensity": 20.0}],
+        "camera": camera,
+        "media": [{"mua": 0.0, "mus": 0.0, "n": 1.0}, glass],
+        "surfaces": [{"type": "checker", "a": 0.8, "b": 0.1, "size": 2.0, "mapping": "xy"}],
+        "shapes": [sphere, floor],
+        "lights": [light],
     })
 }
 
@@ -37,11 +42,11 @@ fn settings_error(settings: Value) -> String {
 
 #[test]
 fn a_valid_scene_decodes() {
-    let scene = scene_from_json(&plane_scene().to_string()).unwrap();
+    let scene = scene_from_json(&sphere_scene().to_string()).unwrap();
     assert_eq!((scene.camera.width, scene.camera.height), (12, 8));
     assert_eq!(
         (scene.media.len(), scene.shapes.len(), scene.lights.len()),
-        (1, 1, 1)
+        (2, 2, 1)
     );
 }
 
@@ -53,11 +58,11 @@ fn bad_scenes_name_the_key() {
     let cases: Vec<(Edit, &str)> = vec![
         (
             |s| s["shapes"][0]["colour"] = json!(1),
-            "shapes[0].colour: unknown key; allowed: boundary, corner, transform, type, u, v",
+            "shapes[0].colour: unknown key; allowed: boundary, center, radius, transform, type",
         ),
         (
-            |s| s["shapes"][0]["boundary"]["surface"] = json!(3),
-            "shapes[0].boundary.surface = 3 is out of range: 1 surfaces defined (indices 0..1)",
+            |s| s["shapes"][1]["boundary"]["surface"] = json!(3),
+            "shapes[1].boundary.surface = 3 is out of range: 1 surfaces defined (indices 0..1)",
         ),
         (
             |s| s["camera"]["fov_deg"] = json!("wide"),
@@ -79,21 +84,21 @@ fn bad_scenes_name_the_key() {
             "lights[0].type: \"laser\": allowed \"quad\", \"disc\", \"point\", \"spot\"",
         ),
         (
-            |s| s["shapes"][0]["corner"] = json!([0, 0]),
-            "shapes[0].corner: expected a list of 3 numbers, got 2 entries",
+            |s| s["shapes"][1]["corner"] = json!([0, 0]),
+            "shapes[1].corner: expected a list of 3 numbers, got 2 entries",
         ),
         (
             |s| s["ambient_medium"] = json!(2),
-            "ambient_medium = 2 is out of range: 1 media defined",
+            "ambient_medium = 2 is out of range: 2 media defined",
         ),
         (
-            |s| s["media"][0]["phase"]["g"] = json!(1.5),
-            "media[0].phase.g",
+            |s| s["media"][1]["phase"] = json!({"g": 1.5}),
+            "media[1].phase.g",
         ),
         (|s| s["media"][0]["mua"] = json!(-1.0), "media[0].mua"),
     ];
     for (edit, message) in cases {
-        let mut scene = plane_scene();
+        let mut scene = sphere_scene();
         edit(&mut scene);
         let got = scene_error(&scene);
         assert!(got.contains(message), "{got:?} lacks {message:?}");
@@ -154,7 +159,7 @@ fn settings_default_to_the_cores_and_name_bad_keys() {
 
 #[test]
 fn the_camera_decodes_alone() {
-    let cam = camera_from_json(&plane_scene()["camera"].to_string()).unwrap();
+    let cam = camera_from_json(&sphere_scene()["camera"].to_string()).unwrap();
     assert_eq!((cam.width, cam.height), (12, 8));
     let got = camera_from_json(r#"{"position": [0, 0, 1]}"#)
         .err()

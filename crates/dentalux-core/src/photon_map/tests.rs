@@ -112,6 +112,15 @@ fn knn_and_radius_equal_brute_force() {
     }
 }
 
+/// The 27 points of a 3 × 3 × 3 grid, 2.5 mm apart, inside the 10 mm cube (x fastest last:
+/// the order the estimates are summed in).
+fn grid_points() -> Vec<Vec3> {
+    let at = |i: usize| 2.5 + 2.5 * i as f64;
+    (0..27)
+        .map(|n| Vec3::new(at(n / 9), at(n / 3 % 3), at(n % 3)))
+        .collect()
+}
+
 #[test]
 fn density_estimates_recover_uniform_density() {
     // N photons of power Φ/N uniform in a 10 mm cube: density Φ/1000 per mm³
@@ -129,20 +138,11 @@ fn density_estimates_recover_uniform_density() {
     let mut sum = 0.0;
     let mut count = 0usize;
     let mut m = 0;
-    for i in 0..3 {
-        for j in 0..3 {
-            for l in 0..3 {
-                let x = Vec3::new(
-                    2.5 + 2.5 * i as f64,
-                    2.5 + 2.5 * j as f64,
-                    2.5 + 2.5 * l as f64,
-                );
-                let e = map.volume_sphere_at_radius(x, Vec3::Z, &iso, r);
-                sum += e.value;
-                count += e.count;
-                m += 1;
-            }
-        }
+    for x in grid_points() {
+        let e = map.volume_sphere_at_radius(x, Vec3::Z, &iso, r);
+        sum += e.value;
+        count += e.count;
+        m += 1;
     }
     let mean = sum / m as f64;
     let expect = rho / (4.0 * PI);
@@ -157,19 +157,10 @@ fn density_estimates_recover_uniform_density() {
     let k = 100;
     let mut nb = Neighbours::new();
     let mut sum = 0.0;
-    for i in 0..3 {
-        for j in 0..3 {
-            for l in 0..3 {
-                let x = Vec3::new(
-                    2.5 + 2.5 * i as f64,
-                    2.5 + 2.5 * j as f64,
-                    2.5 + 2.5 * l as f64,
-                );
-                let e = map.volume_sphere_knn(x, Vec3::Z, &iso, k, 5.0, &mut nb);
-                assert_eq!(e.count, k);
-                sum += e.value;
-            }
-        }
+    for x in grid_points() {
+        let e = map.volume_sphere_knn(x, Vec3::Z, &iso, k, 5.0, &mut nb);
+        assert_eq!(e.count, k);
+        sum += e.value;
     }
     let mean = sum / 27.0;
     let rel_se = 1.0 / ((k - 2) as f64).sqrt() / 27f64.sqrt();
