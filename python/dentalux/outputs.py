@@ -4,8 +4,6 @@ and render.json. Shared by ``dentalux render`` and ``dentalux figures``."""
 
 from __future__ import annotations
 
-import json
-import math
 import resource
 import sys
 from pathlib import Path
@@ -13,28 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from dentalux.scene.resolve import Scene, d65_relative
-
-
-def json_safe(x):
-    """Copy of ``x`` with every non-finite float (inf, NaN) replaced by ``None`` and numpy
-    scalars and arrays turned into Python numbers and lists."""
-    if isinstance(x, np.generic):
-        x = x.item()
-    if isinstance(x, np.ndarray):
-        x = x.tolist()
-    if isinstance(x, float):
-        return x if math.isfinite(x) else None
-    if isinstance(x, dict):
-        return {k: json_safe(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [json_safe(v) for v in x]
-    return x
-
-
-def dumps_strict(obj, **kw) -> str:
-    """Standard JSON (RFC 8259): non-finite numbers become ``null``, never ``Infinity`` or
-    ``NaN``."""
-    return json.dumps(json_safe(obj), allow_nan=False, **kw)
+from dentalux.strict_json import dumps_strict
 
 
 def peak_memory_bytes() -> int:

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from dentalux import _core
+from dentalux.limits import BAND_RANGE_NM, check_threads
 
 
 class SceneError(ValueError):
@@ -111,11 +112,7 @@ LIGHT_SPECTRA = ("D65", "flat")
 
 TRANSFORM_KEYS = {"scale": None, "rotate": None, "translate": None, "matrix": None}
 
-# The colour range [nm]: the CIE colour-matching functions are defined on 360-830 nm (D65
-# on 300-830 nm). One rule for every command (docs/limits.md): a band lies in this range
-# and, for a material, in its data range unless the material allows extrapolation
-# (dentalux.limits.check_bands_in).
-BAND_RANGE_NM = (360.0, 830.0)
+# The colour range [nm] (BAND_RANGE_NM) lives with the other limits in dentalux.limits.
 
 
 # ---------------------------------------------------------------------------------------
@@ -634,7 +631,5 @@ def validate_settings(d: dict, path: str = "settings") -> dict:
         elif kind == "boolean":
             out[key] = boolean(value, p(key))
     if out.get("threads") is not None:
-        from dentalux.limits import check_threads
-
         check_threads(out["threads"], p("threads"))
     return out
