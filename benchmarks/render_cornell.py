@@ -1,7 +1,7 @@
 """Cornell box render speed and BVH speed on a 1 M-triangle mesh (issue 4, performance).
 
-1. The Cornell box (white floor/ceiling/back wall, reflectance 0.6 and 0.3 side walls, a
-   ceiling light, a diffuse box and sphere) at 512 x 512, one band, rendered through
+1. The built-in Cornell box (``scenes/cornell.toml``: coloured side walls, a ceiling light, a
+   diffuse box and sphere) at 512 x 512, one band (540 nm), rendered through
    `dentalux._core.render_band` with the resolved-scene JSON of docs/render-contract.md:
    seconds per phase, rays per second (camera + shadow rays), photons per second, for the
    photon-mapped `pm` integrator and for the `path` reference.
@@ -24,42 +24,16 @@ import time
 from pathlib import Path
 
 from dentalux import _core
+from dentalux.scene.builtin import scene_file
+from dentalux.scene.load import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def cornell(width: int = 512, height: int = 512) -> dict:
-    """A Cornell box [mm] as the resolved one-band scene of docs/render-contract.md."""
-    s = 550.0
-
-    def quad(corner, u, v, surface):
-        return {"type": "quad", "corner": corner, "u": u, "v": v,
-                "boundary": {"kind": "opaque", "surface": surface}}
-
-    return {
-        "camera": {"position": [275, 275, 1350], "look_at": [275, 275, 0], "up": [0, 1, 0],
-                   "fov_deg": 40.0, "width": width, "height": height},
-        "ambient_medium": 0,
-        "media": [{"name": "air", "mua": 0.0, "mus": 0.0, "n": 1.0,
-                   "phase": {"g": 0.0, "fd": 0.0, "lobes": None}}],
-        "surfaces": [{"type": "lambertian", "reflectance": 0.75},
-                     {"type": "lambertian", "reflectance": 0.6},
-                     {"type": "lambertian", "reflectance": 0.3}],
-        "shapes": [
-            quad([0, 0, 0], [s, 0, 0], [0, 0, s], 0),   # floor
-            quad([0, s, 0], [0, 0, s], [s, 0, 0], 0),   # ceiling
-            quad([0, 0, 0], [0, s, 0], [s, 0, 0], 0),   # back wall
-            quad([0, 0, 0], [0, 0, s], [0, s, 0], 1),   # left wall
-            quad([s, 0, 0], [0, s, 0], [0, 0, s], 2),   # right wall
-            {"type": "box", "min": [300, 0, 250], "max": [460, 330, 410],
-             "boundary": {"kind": "opaque", "surface": 0}},
-            {"type": "sphere", "center": [170, 100, 300], "radius": 100.0,
-             "boundary": {"kind": "opaque", "surface": 0}},
-        ],
-        # 0.5 mm below the ceiling, emitting downwards (u x v = -y)
-        "lights": [{"type": "quad", "corner": [213, s - 0.5, 227], "u": [130, 0, 0],
-                    "v": [0, 0, 105], "radiance": 10.0}],
-    }
+def cornell(width: int = 512, height: int = 512) -> str:
+    """The built-in Cornell box (``scenes/cornell.toml``, :mod:`dentalux.scene.builtin`) as
+    the resolved one-band scene JSON of docs/render-contract.md, at 540 nm."""
+    return load_scene(scene_file("cornell")).to_json(540.0, (width, height))
 
 
 def render(integrator: str, spp: int, photons: int, threads: int | None) -> dict:
@@ -67,7 +41,7 @@ def render(integrator: str, spp: int, photons: int, threads: int | None) -> dict
                 "radius": None, "seed": 1, "band": 0, "threads": threads, "max_depth": 64,
                 "final_gather": False}
     t0 = time.perf_counter()
-    image, stats = _core.render_band(json.dumps(cornell()), json.dumps(settings))
+    image, stats = _core.render_band(cornell(), json.dumps(settings))
     wall = time.perf_counter() - t0
     return {
         "integrator": integrator,

@@ -26,6 +26,8 @@ from pathlib import Path
 import colour
 import numpy as np
 
+from dentalux.strict_json import dumps_strict
+
 OBSERVERS = {
     "2": "CIE 1931 2 Degree Standard Observer",
     "1931": "CIE 1931 2 Degree Standard Observer",
@@ -275,7 +277,5 @@ def write_images(radiance, wavelengths_nm, out_dir, illuminant="D65", regions=No
         lab = cs.spectrum_to_Lab(mean, wl, reconstruction)
         summary["regions"][name] = {"rect": [int(v) for v in rect], "lab": lab.tolist(),
                                     "mean_radiance": mean.tolist()}
-    from dentalux.outputs import dumps_strict
-
     Path(paths["json"]).write_text(dumps_strict(summary, indent=2))
     return summary

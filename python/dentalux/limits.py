@@ -15,6 +15,12 @@ from numbers import Integral, Real
 
 from dentalux import _core
 
+# The colour range [nm]: the CIE colour-matching functions are defined on 360-830 nm (D65
+# on 300-830 nm). One rule for every command (docs/limits.md): a band lies in this range
+# and, for a material, in its data range unless the material allows extrapolation
+# (check_bands_in).
+BAND_RANGE_NM = (360.0, 830.0)
+
 # --- counts -------------------------------------------------------------------------------
 #: worker threads: 1 ... THREADS_PER_CORE x the logical cores of this machine
 THREADS_PER_CORE = 4
@@ -250,10 +256,8 @@ def check_texture(width: int, height: int, path: str) -> None:
 def check_bands_in(bands, lo: float, hi: float, what: str, name: str = "bands",
                    extrapolate: bool = False) -> list[float]:
     """One band rule for every command: each band lies in the colour range
-    (:data:`dentalux.scene.schema.BAND_RANGE_NM`) and, unless the material allows
-    extrapolation, in its data range [lo, hi] nm (``what`` names the material)."""
-    from dentalux.scene.schema import BAND_RANGE_NM
-
+    (:data:`BAND_RANGE_NM`) and, unless the material allows extrapolation, in its data
+    range [lo, hi] nm (``what`` names the material)."""
     out = []
     c_lo, c_hi = BAND_RANGE_NM
     for i, b in enumerate(bands):

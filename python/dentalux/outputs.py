@@ -4,8 +4,6 @@ and render.json. Shared by ``dentalux render`` and ``dentalux figures``."""
 
 from __future__ import annotations
 
-import json
-import math
 import resource
 import sys
 from pathlib import Path
@@ -13,28 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from dentalux.scene.resolve import Scene, d65_relative
-
-
-def json_safe(x):
-    """Copy of ``x`` with every non-finite float (inf, NaN) replaced by ``None`` and numpy
-    scalars and arrays turned into Python numbers and lists."""
-    if isinstance(x, np.generic):
-        x = x.item()
-    if isinstance(x, np.ndarray):
-        x = x.tolist()
-    if isinstance(x, float):
-        return x if math.isfinite(x) else None
-    if isinstance(x, dict):
-        return {k: json_safe(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [json_safe(v) for v in x]
-    return x
-
-
-def dumps_strict(obj, **kw) -> str:
-    """Standard JSON (RFC 8259): non-finite numbers become ``null``, never ``Infinity`` or
-    ``NaN``."""
-    return json.dumps(json_safe(obj), allow_nan=False, **kw)
+from dentalux.strict_json import dumps_strict
 
 
 def peak_memory_bytes() -> int:
@@ -83,12 +60,13 @@ def colour_inputs(scene: Scene, bands: list[float]) -> tuple[np.ndarray, str, fl
 
 def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None = None,
                          scene_file: str | None = None, warn=None,
-                         white: float | None = None) -> dict:
+                         white: float | None = None, write_json: bool = True) -> dict:
     """Write radiance.npy, previews, colour images and render.json for a RenderResult;
     returns the render.json dictionary. ``white``: the radiance (relative to the light's
     spectrum) that counts as L* = 100, e.g. a white tile measured in the same geometry; the
     image is then exposed so that this white is display white. Default: the brightest
-    light's radiance, with automatic exposure."""
+    light's radiance, with automatic exposure. ``write_json=False`` leaves render.json to a
+    caller that adds to the dictionary first (it is then written once)."""
     from dentalux.color import write_images
 
     out = Path(out)
@@ -126,5 +104,6 @@ def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None =
         if warn:
             warn(f"warning: no colour image: {exc}")
     summary["peak_memory_bytes"] = peak_memory_bytes()
-    (out / "render.json").write_text(dumps_strict(summary, indent=2))
+    if write_json:
+        (out / "render.json").write_text(dumps_strict(summary, indent=2))
     return summary

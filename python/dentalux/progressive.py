@@ -39,9 +39,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dentalux.distributed import LocalExecutor, Task
+from dentalux.scene.schema import SETTINGS_SCHEMA
 
-# Last pass the core accepts (ppm.rs: MAX_PASSES − 1).
-MAX_PASSES = 4095
+# Last pass the core accepts (integrators/settings.rs: MAX_PASSES − 1).
+MAX_PASSES = SETTINGS_SCHEMA["max_passes"] - 1
 # Passes needed before a target error can stop the render (s² from fewer is too unreliable).
 MIN_PASSES_FOR_TARGET = 4
 

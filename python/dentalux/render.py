@@ -25,25 +25,20 @@ from dentalux import _core, limits
 from dentalux.progress import bar
 from dentalux.scene.load import as_scene
 from dentalux.scene.resolve import Scene
-from dentalux.scene.schema import PATH_TRACERS, RENDER_KEYS, validate_bands, validate_settings
+from dentalux.scene.schema import RENDER_KEYS, SETTING_KEYS, validate_bands, validate_settings
 
-# Settings passed through ``**options`` (the core's names, docs/render-contract.md).
-OPTIONS = ("volume_photons", "volume_stored", "aim", "k", "radius", "step", "max_depth",
-           "passes", "alpha", "final_gather", "kernel_layer", "kernel_clip", "pass_index")
+# Settings passed through ``**options`` (the core's names, docs/render-contract.md): all but
+# the named arguments of :func:`render`, ``band`` (one per wavelength) and ``threads``.
+OPTIONS = tuple(k for k in SETTING_KEYS
+                if k not in ("integrator", "spp", "photons", "seed", "band", "threads"))
 # Ticks of the progress bar per band; the core's progress(done) is mapped onto them.
 TICKS = 1000
 
 
 def photons_traced(settings: dict) -> int:
-    """Photons one pass of one band traces (the progress bar's unit): none for the path
-    tracers, surface photons for ``pm``, surface plus volume photons for the volume
-    integrators (volume photons stored when ``volume_stored`` sets a budget)."""
-    if settings["integrator"] in PATH_TRACERS:
-        return 0
-    volume = settings["integrator"] in ("vpm", "vpm-full", "ppm")
-    # with a stored-photon budget the core counts photons stored, not emitted
-    per_pass = settings.get("volume_stored") or settings["volume_photons"]
-    return settings["photons"] + (per_pass if volume else 0)
+    """Photons one pass of one band traces (the progress bar's unit besides pixels), as the
+    core counts them (``Settings::photons_traced``)."""
+    return _core.photons_traced(json.dumps(settings))
 
 
 @dataclass
@@ -129,7 +124,7 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
            correlated_bands: bool = False, **options) -> RenderResult:
     """Render ``scene`` (a Scene, a dict or a TOML path) at ``bands`` [nm].
 
-    integrator: pm | path | vpm | vpm-full | volpath | ppm (default: the scene's
+    integrator: one of ``scene.schema.INTEGRATORS`` (default: the scene's
     ``render.integrator``, else ``vpm`` for scenes with dielectric media and ``pm``
     otherwise). spp: samples per pixel; photons: photons for the surface map (the volume
     integrators take them from the volume pass); seed: random seed; threads: worker

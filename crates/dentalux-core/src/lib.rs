@@ -1,19 +1,32 @@
 //! dentalux-core: everything dentalux does per photon and per ray.
 //!
-//! Crate map (data flows top to bottom):
-//! - [`math`], [`rng`], [`sampling`]: vectors and frames, deterministic random streams, warps.
+//! Crate map (lower layers first):
+//! - [`math`], [`rng`], [`sampling`]: vectors and frames, deterministic random streams and
+//!   their tags, warps from uniforms to distributions.
+//! - [`error`], [`control`]: input errors that name the field and its allowed range;
+//!   cancellation and progress shared with the caller.
 //! - [`phase`]: phase functions of the paper (eqs. 7–10).
 //! - [`fresnel`]: smooth dielectric interfaces (unpolarised Fresnel, refraction, TIR).
 //! - [`medium`]: one homogeneous participating medium for one band (eqs. 1–6).
-//! - [`integrators`]: the slab simulator (what a spectrophotometer measures).
-//! - [`control`]: cancellation and progress shared with the caller.
-//! - [`error`]: input validation errors that name the field and its allowed range.
+//! - [`geometry`]: rays, hits, shapes, triangle meshes, transforms and the BVH.
+//! - [`camera`], [`film`], [`surface`], [`lights`]: the pinhole camera, the image and its
+//!   tiles, opaque surface materials, light sources.
+//! - [`scene`]: one band's scene as plain data, with the BVH over every shape.
+//! - [`photon_map`]: photon records, the kd-tree and the density estimates (eq. 11).
+//! - [`instrument`]: a spectrophotometer's measuring geometry (lit spot, window, backing) as
+//!   the slab simulator sees it.
+//! - [`integrators`]: the slab simulator (what a spectrophotometer measures) and the
+//!   renderers (`pm`, `path`, `vpm`, `vpm-full`, `ppm`, `volpath`, `volpath-nee`), with the
+//!   render settings and the dispatch on them.
+//! - [`contract`]: the render contract's JSON (docs/render-contract.md) decoded into a
+//!   [`scene::Scene`] and [`integrators::settings::Settings`], and the settings' schema.
 //!
 //! Units: millimetres, 1/mm, nanometres. No Python in this crate.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod contract;
 pub mod control;
 pub mod error;
 pub mod film;

@@ -1,8 +1,50 @@
 //! Deterministic random streams: every batch of photons and every tile of pixels derives its
 //! own generator from (seed, band, batch), so results do not depend on thread or machine count.
+//!
+//! The batch index carries a tag saying whose stream it is, so no two users of one seed ever
+//! draw from the same stream: camera tiles use small indices (the tile number),
+//! [`PHOTON_STREAM`] marks photon batches (plus [`pass_tag`] of a `ppm` pass and
+//! [`SURFACE_PASS`] for a surface-only photon pass), [`FILM_STREAM`] the film's sub-pixel
+//! rotations. Passes of one render also differ in their seed: [`pass_seed`] puts the pass
+//! number into bits [`PASS_SHIFT`] .. [`PASS_SHIFT`] + [`PASS_BITS`] of it.
 
 use rand_core::{RngCore, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
+
+/// Tag mixed into the batch index of photon streams (camera tiles use small indices).
+pub const PHOTON_STREAM: u64 = 1 << 48;
+
+/// Tag of the streams of the surface-only photon pass that completes a camera pass's surface
+/// map when a stored budget stopped the volume pass before `photons`
+/// (`integrators::photon_trace::trace_camera_maps`).
+pub const SURFACE_PASS: u64 = 1 << 44;
+
+/// Stream tag of the film's sub-pixel rotations (apart from tiles' and photons' streams).
+pub const FILM_STREAM: u64 = 1 << 60;
+
+/// Bits of a pass number in [`pass_seed`] and [`pass_tag`]: passes are below 2^`PASS_BITS`.
+pub const PASS_BITS: u32 = 12;
+
+/// Where [`pass_seed`] puts the pass number: bits `PASS_SHIFT` .. `PASS_SHIFT` +
+/// [`PASS_BITS`] of the seed.
+pub const PASS_SHIFT: u32 = 40;
+
+/// Seed of the camera pass of pass `pass` (1-based): `seed ^ (pass << 40)`. `ppm` uses it per
+/// pass; the other integrators for their `pass_index` > 0, so every pass has its own streams.
+pub fn pass_seed(seed: u64, pass: u32) -> u64 {
+    seed ^ ((pass as u64) << PASS_SHIFT)
+}
+
+/// `seed` without the bits [`pass_seed`] flips: the same for every pass of one seed.
+pub fn seed_without_pass(seed: u64) -> u64 {
+    seed & !(((1u64 << PASS_BITS) - 1) << PASS_SHIFT)
+}
+
+/// Tag of the photon streams of `ppm` pass `pass` (1-based): `pass · 2³²` (below
+/// [`SURFACE_PASS`], since passes are below 2^[`PASS_BITS`]).
+pub fn pass_tag(pass: u32) -> u64 {
+    (pass as u64) << 32
+}
 
 /// A random stream (xoshiro256++), keyed by (seed, band, batch).
 #[derive(Debug, Clone)]

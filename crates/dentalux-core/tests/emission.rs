@@ -11,7 +11,7 @@ use dentalux_core::integrators::aim::Aim;
 use dentalux_core::integrators::photon_trace::{
     trace_camera_maps, trace_emission, Emission, PhotonMaps, StoreMode, Targets,
 };
-use dentalux_core::integrators::render::Settings;
+use dentalux_core::integrators::settings::Settings;
 use dentalux_core::lights::Light;
 use dentalux_core::medium::Medium;
 use dentalux_core::phase::PhaseFunction;

@@ -9,7 +9,8 @@ use dentalux_core::geometry::shapes::{BoxShape, Quad, Sphere};
 
 use dentalux_core::geometry::Vec3;
 use dentalux_core::integrators::photon_trace::{trace_photons, StoreMode};
-use dentalux_core::integrators::render::{render_band, Integrator, Settings};
+use dentalux_core::integrators::render::render_band;
+use dentalux_core::integrators::settings::{Integrator, Settings};
 use dentalux_core::lights::Light;
 use dentalux_core::medium::Medium;
 use dentalux_core::phase::PhaseFunction;

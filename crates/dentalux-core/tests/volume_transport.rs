@@ -10,18 +10,19 @@ use dentalux_core::control::Control;
 use dentalux_core::geometry::shapes::{BoxShape, Cylinder, Quad, Sphere};
 use dentalux_core::geometry::{Ray, Vec3};
 use dentalux_core::integrators::photon_trace::{
-    trace_photons, trace_photons_with, StoreMode, Targets, SURFACE_PASS,
+    trace_photons, trace_photons_with, StoreMode, Targets,
 };
 use dentalux_core::integrators::planar_nee::PlanarFaces;
-use dentalux_core::integrators::render::Scratch;
+use dentalux_core::integrators::settings;
 use dentalux_core::integrators::slab::{self, Estimator, Incidence, SlabConfig, SlabLayer};
+use dentalux_core::integrators::tiles::Scratch;
 use dentalux_core::integrators::volpath;
-use dentalux_core::integrators::vpm::{self, Vpm, VpmParams};
+use dentalux_core::integrators::vpm::{Vpm, VpmParams};
 use dentalux_core::lights::Light;
 use dentalux_core::medium::Medium;
 use dentalux_core::phase::PhaseFunction;
 use dentalux_core::photon_map::Neighbours;
-use dentalux_core::rng::Stream;
+use dentalux_core::rng::{Stream, SURFACE_PASS};
 use dentalux_core::scene::{Boundary, Geometry, Scene, ShapeInstance};
 use dentalux_core::surface::{Mapping, Surface};
 use rayon::prelude::*;
@@ -203,7 +204,7 @@ fn ledger_surface_map_in_closed_sphere() {
     for d in dirs {
         let e = maps
             .surface
-            .surface_irradiance(d * 10.0, -d, 200, 5.0, &mut nb);
+            .irradiance_disc_knn(d * 10.0, -d, 200, 5.0, &mut nb);
         sum += e.value;
     }
     let m = sum / 6.0;
@@ -429,7 +430,7 @@ fn volpath_planar_nee_agrees_with_plain_volpath() {
 #[test]
 fn vpm_full_slab_matches_slab_simulator() {
     let (scene, p, rt, se_slab) = slab_under_sky(20.0);
-    let kernels = [vpm::DEFAULT_LAYER, 0.0];
+    let kernels = [settings::DEFAULT_LAYER, 0.0];
     // per map seed: the estimate with each kernel
     let est: Vec<Vec<f64>> = (0..4u64)
         .map(|seed| {
@@ -694,7 +695,8 @@ fn convergence_curve_disc() {
 /// within 4 standard errors plus a 4 % bias budget. Also: the render is deterministic.
 #[test]
 fn ppm_converges_to_volpath_on_disc() {
-    use dentalux_core::integrators::render::{render_band, Integrator, Settings};
+    use dentalux_core::integrators::render::render_band;
+    use dentalux_core::integrators::settings::{Integrator, Settings};
     let scene = disc_scene(1.4, 20, 15);
     let (reference, var) = render(&scene, 1024, 51, |r, rng| volpath::radiance(&scene, r, rng));
     let run = |passes: u32| {
@@ -735,7 +737,7 @@ fn layer_experiment() {
         let b = mean(&reference);
         let noise2 = var.iter().sum::<f64>() / var.len() as f64;
         for photons in [400_000u64, 3_200_000] {
-            for layer in [0.0, vpm::DEFAULT_LAYER] {
+            for layer in [0.0, settings::DEFAULT_LAYER] {
                 let params = VpmParams {
                     layer,
                     ..VpmParams::default()

@@ -2,6 +2,7 @@
 //! runs long calls without the GIL on a worker thread, and turns core errors into Python
 //! exceptions. It holds no physics.
 
+mod physics;
 mod render;
 mod runner;
 mod slab;
@@ -20,8 +21,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(slab::slab_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(slab::phase_sample_cos, m)?)?;
     m.add_function(wrap_pyfunction!(slab::phase_eval, m)?)?;
+    m.add_function(wrap_pyfunction!(physics::fresnel_reflectance, m)?)?;
     m.add_function(wrap_pyfunction!(render::render_band, m)?)?;
     m.add_function(wrap_pyfunction!(render::camera_project, m)?)?;
+    m.add_function(wrap_pyfunction!(render::settings_schema, m)?)?;
+    m.add_function(wrap_pyfunction!(render::photons_traced, m)?)?;
     m.add_function(wrap_pyfunction!(panic_in_worker, m)?)?;
     Ok(())
 }

@@ -19,6 +19,7 @@ from dentalux.output_paths import check_out_dir, rebase, staged_dir
 from dentalux.outputs import dumps_strict, peak_memory_bytes, write_render_outputs
 from dentalux.render import render
 from dentalux.scene.load import load_scene
+from dentalux.scene.schema import INTEGRATORS
 
 
 def parse_bands(text: str | None) -> list[float] | None:
@@ -66,8 +67,7 @@ def render_command(
     seed: int = typer.Option(None, help="random seed (default: the scene's, else 1)"),
     threads: int = typer.Option(None, help="worker threads (default: all cores)"),
     integrator: str = typer.Option(
-        None, help="pm | path | vpm | vpm-full | volpath | volpath-nee | ppm "
-                   "(default: from the scene)"
+        None, help=" | ".join(INTEGRATORS) + " (default: from the scene)"
     ),
     k: int = typer.Option(None, help="nearest photons in a radiance estimate"),
     radius: float = typer.Option(None, help="maximum photon search radius [mm]"),
@@ -121,7 +121,7 @@ def render_command(
     warn = None if as_json else (lambda msg: print(msg, file=sys.stderr))
     with staged_dir(out, "--out") as stage:
         summary = write_render_outputs(scene, result, stage, scene_file=str(scene_file),
-                                       warn=warn)
+                                       warn=warn, write_json=False)
         summary = rebase(summary, stage, out)
         if progressive:
             summary["progressive"] = _finite(result.stats["progressive"])

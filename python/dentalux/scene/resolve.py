@@ -24,13 +24,8 @@ import numpy as np
 
 from dentalux.scene import transform as tf
 from dentalux.scene.meshes import MeshData, check_closed, is_closed, load_mesh, point_inside
-from dentalux.scene.schema import (
-    MEDIUM_FALLBACK,
-    SceneError,
-    fail,
-    spectrum_at,
-    validate,
-)
+from dentalux.scene.schema import MEDIUM_FALLBACK, SceneError, fail, spectrum_at
+from dentalux.scene.validate import validate
 
 _D65: tuple[np.ndarray, np.ndarray] | None = None
 

@@ -1,4 +1,5 @@
-"""Validation of a scene description (a dict, as read from TOML or built in Python).
+"""The scene description's key tables and the checks of its values (a dict, as read from TOML
+or built in Python); :mod:`dentalux.scene.validate` applies them to a whole scene.
 
 Every check names the key path of the offending value (``shapes[2].radius``), the allowed
 range and, for an unknown key, the closest allowed key (``difflib``). The result is a
@@ -12,11 +13,15 @@ The key reference with types, units and defaults is ``docs/scene-format.md``.
 from __future__ import annotations
 
 import difflib
+import json
 import math
 from numbers import Integral, Real
 from typing import Any
 
 import numpy as np
+
+from dentalux import _core
+from dentalux.limits import BAND_RANGE_NM, check_threads
 
 
 class SceneError(ValueError):
@@ -32,29 +37,24 @@ TOP_KEYS = ("scene", "render", "camera", "media", "surfaces", "shapes", "lights"
 
 SCENE_KEYS = {"name": "", "description": "", "units": "mm"}
 
+# The settings' keys, defaults and ranges, the integrator names and the pass bound live in
+# the core (integrators/settings.rs, contract/mod.rs); this layer reads them once.
+SETTINGS_SCHEMA = json.loads(_core.settings_schema())
+# every settings key of the contract, in order: {name: {"kind", "default", ranges...}}
+SETTING_KEYS = {k["name"]: k for k in SETTINGS_SCHEMA["keys"]}
+
+# A scene's [render] table: the bands and the settings a scene may set. The integrator's
+# default is derived from the scene (vpm with scattering media, else pm), hence None here.
 RENDER_KEYS = {
     "bands": [450.0, 540.0, 605.0],
-    "integrator": None,
-    "spp": 16,
-    "photons": 200_000,
-    "volume_photons": 1_000_000,
-    "volume_stored": 0,
-    "aim": 0.0,
-    "k": 64,
-    "radius": None,
-    "step": None,
-    "seed": 1,
-    "max_depth": 64,
-    "passes": 1,
-    "alpha": 0.7,
-    "final_gather": False,
-    "kernel_layer": 0.3,
-    "kernel_clip": True,
+    **{name: None if name == "integrator" else k["default"]
+       for name, k in SETTING_KEYS.items() if k["scene"]},
 }
 
-INTEGRATORS = ("pm", "path", "vpm", "vpm-full", "volpath", "volpath-nee", "ppm")
+INTEGRATORS = tuple(i["name"] for i in SETTINGS_SCHEMA["integrators"])
 # integrators that trace no photons
-PATH_TRACERS = ("path", "volpath", "volpath-nee")
+PATH_TRACERS = tuple(i["name"] for i in SETTINGS_SCHEMA["integrators"]
+                     if not i["traces_photons"])
 
 CAMERA_KEYS = {
     "position": REQUIRED,
@@ -112,11 +112,7 @@ LIGHT_SPECTRA = ("D65", "flat")
 
 TRANSFORM_KEYS = {"scale": None, "rotate": None, "translate": None, "matrix": None}
 
-# The colour range [nm]: the CIE colour-matching functions are defined on 360-830 nm (D65
-# on 300-830 nm). One rule for every command (docs/limits.md): a band lies in this range
-# and, for a material, in its data range unless the material allows extrapolation
-# (dentalux.limits.check_bands_in).
-BAND_RANGE_NM = (360.0, 830.0)
+# The colour range [nm] (BAND_RANGE_NM) lives with the other limits in dentalux.limits.
 
 
 # ---------------------------------------------------------------------------------------
@@ -611,124 +607,29 @@ def validate_bands(bands: Any, path: str = "bands") -> list[float]:
 
 
 def validate_settings(d: dict, path: str = "settings") -> dict:
-    """Integrator settings shared by ``[render]``, ``dentalux.render`` and the CLI."""
+    """Integrator settings shared by ``[render]``, ``dentalux.render`` and the CLI, checked
+    against the core's ranges (:data:`SETTING_KEYS`). Keys whose default is ``None``
+    (radius, step, threads) and the integrator may be ``None``: derived later."""
     p = (lambda k: f"{path}.{k}") if path else (lambda k: k)
     out = dict(d)
-    if out.get("integrator") is not None:
-        out["integrator"] = string(out["integrator"], p("integrator"), INTEGRATORS)
-    for key, lo in (("spp", 1), ("photons", 0), ("volume_photons", 0), ("volume_stored", 0),
-                    ("k", 1),
-                    ("seed", 0), ("max_depth", 1), ("passes", 1)):
-        if key in out:
-            out[key] = integer(out[key], p(key), lo=lo)
-    if "pass_index" in out:
-        # the upper bound (pass_index + passes <= 4095) is the core's to check
-        out["pass_index"] = integer(out["pass_index"], p("pass_index"), lo=0)
-    for key in ("radius", "step"):
-        if out.get(key) is not None:
-            out[key] = positive(out[key], p(key))
-    if "alpha" in out:
-        out["alpha"] = number(out["alpha"], p("alpha"), lo=0.0, hi=1.0, lo_open=True,
-                              hi_open=True)
-    if "aim" in out:
-        out["aim"] = number(out["aim"], p("aim"), lo=0.0, hi=1.0, hi_open=True)
-    for key in ("final_gather", "kernel_clip"):
-        if key in out:
-            out[key] = boolean(out[key], p(key))
-    if "kernel_layer" in out:
-        out["kernel_layer"] = number(out["kernel_layer"], p("kernel_layer"), lo=0.0, hi=1.0)
+    for key, spec in SETTING_KEYS.items():
+        if key not in out:
+            continue
+        value, kind = out[key], spec["kind"]
+        if value is None and (spec["default"] is None or kind == "integrator"):
+            continue
+        if kind == "integrator":
+            out[key] = string(value, p(key), INTEGRATORS)
+        elif kind == "integer":
+            # pass_index: the upper bound (pass_index + passes < max_passes) is the core's
+            out[key] = integer(value, p(key), lo=spec["lo"])
+        elif kind == "positive":
+            out[key] = positive(value, p(key), spec["unit"])
+        elif kind == "real":
+            out[key] = number(value, p(key), lo=spec["lo"], hi=spec["hi"],
+                              lo_open=spec["lo_open"], hi_open=spec["hi_open"])
+        elif kind == "boolean":
+            out[key] = boolean(value, p(key))
     if out.get("threads") is not None:
-        from dentalux.limits import check_threads
-
-        out["threads"] = integer(out["threads"], p("threads"), lo=1)
         check_threads(out["threads"], p("threads"))
     return out
-
-
-def validate(raw: Any) -> dict:
-    """Validate a whole scene description and return it normalised (defaults filled)."""
-    check_keys(raw, TOP_KEYS, "")
-    for key in ("camera", "shapes", "lights"):
-        if key not in raw:
-            raise SceneError(f"{key}: missing (required)")
-    scene = fill(check_keys(raw.get("scene", {}), SCENE_KEYS, "scene"), SCENE_KEYS, "scene")
-    string(scene["name"], "scene.name")
-    string(scene["description"], "scene.description")
-    string(scene["units"], "scene.units", ("mm",))
-    out: dict = {"scene": scene, "render": validate_render(raw.get("render", {}))}
-    out["camera"] = validate_camera(raw["camera"])
-
-    media_raw = raw.get("media", {})
-    if not isinstance(media_raw, dict):
-        raise fail("media", media_raw, "must be a table of named media")
-    media = {"air": {**{k: None for k in MEDIUM_KEYS}}} if "air" not in media_raw else {}
-    for name, m in media_raw.items():
-        media[name] = validate_medium(name, m)
-    out["media"] = media
-
-    surf_raw = raw.get("surfaces", {})
-    if not isinstance(surf_raw, dict):
-        raise fail("surfaces", surf_raw, "must be a table of named surfaces")
-    out["surfaces"] = {name: validate_surface(name, s) for name, s in surf_raw.items()}
-
-    shapes = raw["shapes"]
-    if isinstance(shapes, (str, dict)) or not hasattr(shapes, "__len__"):
-        raise fail("shapes", shapes, "must be a list of tables ([[shapes]])")
-    from dentalux.scene.tooth import expand_shape  # a tooth entry gives two meshes
-
-    out["shapes"] = [m for i, s in enumerate(shapes) for m in expand_shape(i, s)]
-
-    lights = raw["lights"]
-    if isinstance(lights, (str, dict)) or not hasattr(lights, "__len__"):
-        raise fail("lights", lights, "must be a list of tables ([[lights]])")
-    if len(lights) == 0:
-        raise SceneError("lights: the scene has no lights (add at least one [[lights]])")
-    out["lights"] = [validate_light(i, s) for i, s in enumerate(lights)]
-
-    out["regions"] = validate_regions(raw.get("regions", {}), out["camera"]["resolution"])
-    _check_names(out)
-    return out
-
-
-def validate_regions(regions: Any, resolution) -> dict:
-    """``[regions]``: named pixel rectangles ``[x0, y0, x1, y1]`` (x1, y1 exclusive) whose
-    mean CIELAB ``dentalux render`` writes to colour.json (what a spectrophotometer's
-    aperture would read there)."""
-    if not isinstance(regions, dict):
-        raise fail("regions", regions, "must be a table of named [x0, y0, x1, y1] rectangles")
-    w, h = resolution
-    out = {}
-    for name, rect in regions.items():
-        path = f"regions.{name}"
-        if isinstance(rect, (str, dict)) or not hasattr(rect, "__len__") or len(rect) != 4:
-            raise fail(path, rect, "must be [x0, y0, x1, y1] in pixels")
-        x0, y0, x1, y1 = (integer(v, f"{path}[{j}]", lo=0) for j, v in enumerate(rect))
-        if not (x0 < x1 <= w and y0 < y1 <= h):
-            raise fail(path, list(rect), f"need x0 < x1 <= {w} and y0 < y1 <= {h} (the "
-                                         "camera's resolution)")
-        out[name] = [x0, y0, x1, y1]
-    return out
-
-
-def _undefined(kind: str, name: str, path: str, defined) -> SceneError:
-    defined = list(defined)
-    close = difflib.get_close_matches(name, defined, n=1, cutoff=0.6)
-    hint = f"did you mean '{close[0]}'? " if close else ""
-    listing = ", ".join(defined) if defined else "none"
-    return fail(path, name, f"no {kind} of that name is defined; {hint}(defined: {listing})")
-
-
-def _check_names(scene: dict) -> None:
-    """Every medium and surface a shape or the camera names must be defined."""
-    media, surfaces = scene["media"], scene["surfaces"]
-    if scene["camera"]["medium"] not in media:
-        raise _undefined("medium", scene["camera"]["medium"], "camera.medium", media)
-    for i, s in enumerate(scene["shapes"]):
-        b = s["boundary"]
-        if b["kind"] == "opaque":
-            if b["surface"] not in surfaces:
-                raise _undefined("surface", b["surface"], f"shapes[{i}].surface", surfaces)
-        else:
-            for k in ("inside", "outside"):
-                if b[k] not in media:
-                    raise _undefined("medium", b[k], f"shapes[{i}].{k}", media)

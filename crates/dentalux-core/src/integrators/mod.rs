@@ -8,16 +8,27 @@
 //! - [`ppm`]: probabilistic progressive photon mapping (bounded memory, consistent).
 //! - [`volpath`]: the unbiased volumetric path tracer that judges them; [`planar_nee`] lets
 //!   it connect to lights through flat refracting faces (a faster reference).
+//! - [`pm`]: surface photon mapping for opaque scenes with clear media; [`path`] the path
+//!   tracer that judges it; [`direct`] the direct light both take at a surface.
 //! - [`transport`]: boundary crossing, shadow-ray transmittance (eqs. 12–13), ray spawning.
+//! - [`settings`]: the render settings, their defaults and ranges, and the returned statistics;
+//!   [`tiles`]: the tile loop every camera pass shares; [`render`]: the dispatch on
+//!   `settings.integrator`.
+//!
+//! Layering (no module uses one above it): `settings`, `transport`, `tiles` → `direct`,
+//! `photon_trace`, `aim`, `planar_nee` → `path`, `pm`, `vpm`, `volpath` → `ppm` → `render`.
 
 pub mod aim;
+pub mod direct;
 pub mod path;
 pub mod photon_trace;
 pub mod planar_nee;
 pub mod pm;
 pub mod ppm;
 pub mod render;
+pub mod settings;
 pub mod slab;
+pub mod tiles;
 pub mod transport;
 pub mod volpath;
 pub mod vpm;

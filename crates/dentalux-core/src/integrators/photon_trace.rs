@@ -24,14 +24,12 @@ use crate::integrators::aim::Aim;
 use crate::integrators::transport::{cross, spawn};
 use crate::math::Frame;
 use crate::photon_map::{Photon, PhotonMap};
-use crate::rng::Stream;
+use crate::rng::{Stream, PHOTON_STREAM, SURFACE_PASS};
 use crate::sampling::{cosine_hemisphere, sample_exponential};
 use crate::scene::{Boundary, Scene};
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// Tag mixed into the batch index of photon streams (camera tiles use small indices).
-pub const PHOTON_STREAM: u64 = 1 << 48;
 /// Photons per batch (fixed: part of the determinism contract).
 pub const BATCH: u64 = 4096;
 /// Most interactions one photon may have before it is dropped (a guard against endless TIR
@@ -63,10 +61,6 @@ impl Targets {
         surface: true,
     };
 }
-
-/// Tag of the streams of the surface-only photon pass that completes a camera pass's surface
-/// map when a stored budget stopped the volume pass before `photons` ([`trace_camera_maps`]).
-pub const SURFACE_PASS: u64 = 1 << 44;
 
 /// Where the emitted power went (sums of photon powers, same units as light power Φ).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -503,7 +497,7 @@ pub fn trace_emission(
 /// and by each `ppm` pass.
 pub fn trace_camera_maps(
     scene: &Scene,
-    settings: &crate::integrators::render::Settings,
+    settings: &crate::integrators::settings::Settings,
     mode: StoreMode,
     tag: u64,
     control: &Control,
@@ -527,7 +521,7 @@ pub fn trace_camera_maps(
     )?;
     let from_volume = settings.photons.min(maps.emitted);
     let rest = settings.photons - from_volume;
-    // progress counts `photons` surface photons as before (render.rs): these are done
+    // progress counts `photons` surface photons (render.rs): these are done
     control.add_done(from_volume);
     if from_volume > 0 {
         // the volume pass's photons carry Φ / (its photons emitted); as part of an emission

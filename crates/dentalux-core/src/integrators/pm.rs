@@ -17,9 +17,10 @@
 //! `r_max` is `settings.radius` or, when unset, a tenth of the scene's bounding-box diagonal
 //! (it only matters where fewer than k photons lie within it).
 
-use super::path::{check_clear_media, direct_irradiance, facing};
+use super::direct::{check_clear_media, direct_irradiance, facing};
 use super::photon_trace::{trace_photons, StoreMode};
-use super::render::{render_tiles, Scratch, Settings, Stats};
+use super::settings::{Settings, Stats};
+use super::tiles::{render_tiles, Scratch};
 use super::transport::{cross, spawn};
 use crate::control::Control;
 use crate::error::Result;
@@ -60,7 +61,7 @@ pub const DISC_THICKNESS: f64 = 0.25;
 /// which is itself left out of the sum: for photons scattered by a Poisson process of
 /// density ρ, (k − 1)/(π r_k²) is the unbiased estimate of ρ, k/(π r_k²) is k/(k − 1) too
 /// high. With fewer than k photons within `r_max`, r = `r_max` and all of them count.
-pub fn surface_irradiance(
+pub fn irradiance_disc_filter_knn(
     map: &PhotonMap,
     x: Vec3,
     n: Vec3,
@@ -182,7 +183,7 @@ impl SurfacePm<'_> {
                         let d = Frame::from_axis(n_f).to_world(cosine_hemisphere(rng.uniform2()));
                         PI * self.trace(spawn(scene, &hit, d), medium, false, false, rng, scratch)
                     } else {
-                        let e = surface_irradiance(
+                        let e = irradiance_disc_filter_knn(
                             self.map,
                             hit.p,
                             n_f,
@@ -295,7 +296,7 @@ mod tests {
                     continue;
                 }
                 let x = Vec3::new(5.0 + i as f64 * 1.25, y, 0.0);
-                vals.push(surface_irradiance(&map, x, Vec3::Z, k, 10.0, &mut nb).value);
+                vals.push(irradiance_disc_filter_knn(&map, x, Vec3::Z, k, 10.0, &mut nb).value);
             }
         }
         let mean_se = |vals: &[f64]| {
@@ -311,7 +312,7 @@ mod tests {
         let foot: Vec<f64> = (0..360)
             .map(|i| {
                 let x = Vec3::new(5.0 + i as f64 * 0.25, 50.0, 0.0);
-                surface_irradiance(&map, x, Vec3::Z, k, 10.0, &mut nb).value
+                irradiance_disc_filter_knn(&map, x, Vec3::Z, k, 10.0, &mut nb).value
             })
             .collect();
         let (m, se) = mean_se(&foot);

@@ -11,23 +11,23 @@
 //! at the mean density of pass 1's map (half the `vpm` default cap).
 //!
 //! Every scattering event is stored (the `vpm-full` rule), so single scattering is exact
-//! through refraction. Streams: pass p traces photons with tag p·2³² (a surface pass, when
-//! one is needed: plus [`SURFACE_PASS`]) and renders its camera pass with seed
-//! `seed ^ (p << 40)`.
+//! through refraction. Streams (rng.rs): pass p traces photons with tag [`pass_tag`]`(p)` =
+//! p·2³² (a surface pass, when one is needed: plus [`SURFACE_PASS`]) and renders its camera
+//! pass with seed [`pass_seed`]`(seed, p)` = `seed ^ (p << 40)`.
+//!
+//! [`SURFACE_PASS`]: crate::rng::SURFACE_PASS
 
 use crate::control::Control;
 use crate::error::Result;
 use crate::integrators::photon_trace::PhotonMaps;
 use crate::integrators::photon_trace::{trace_camera_maps, StoreMode};
-use crate::integrators::render::{render_tiles, Settings, Stats};
+use crate::integrators::settings::{Settings, Stats};
+use crate::integrators::tiles::render_tiles;
 use crate::integrators::vpm::{default_volume_radius, Vpm, VpmParams};
 use crate::photon_map::PHOTON_BYTES;
+use crate::rng::{pass_seed, pass_tag};
 use crate::scene::Scene;
 use std::time::Instant;
-
-/// Bound on the pass number: passes run 1 ..= MAX_PASSES − 1 (the pass number must fit the
-/// stream tags below the surface-pass bit).
-pub const MAX_PASSES: u32 = 4096;
 
 /// r_i / r_1 for pass `i` (1-based) in `dim` dimensions with parameter `alpha`.
 pub fn radius_ratio(i: u32, alpha: f64, dim: i32) -> f64 {
@@ -38,31 +38,15 @@ pub fn radius_ratio(i: u32, alpha: f64, dim: i32) -> f64 {
     f.powf(1.0 / dim as f64)
 }
 
-/// Seed of the camera pass of pass `pass` (1-based): `seed ^ (pass << 40)`. Other
-/// integrators use it for their `pass_index` > 0 too, so every pass has its own streams.
-pub fn pass_seed(seed: u64, pass: u32) -> u64 {
-    seed ^ ((pass as u64) << PASS_SHIFT)
-}
-
-/// Where [`pass_seed`] puts the pass number: bits `PASS_SHIFT` .. `PASS_SHIFT` + 12 of the
-/// seed (passes are below [`MAX_PASSES`] = 2¹²).
-pub const PASS_SHIFT: u32 = 40;
-
 /// The photon maps of pass `pass` (1-based): `settings.volume_photons` volume photons with
-/// tag `pass · 2³²`, the surface map from `settings.photons` of them (`trace_camera_maps`).
+/// tag [`pass_tag`]`(pass)`, the surface map from `settings.photons` of them (`trace_camera_maps`).
 fn trace_pass(
     scene: &Scene,
     settings: &Settings,
     control: &Control,
     pass: u32,
 ) -> Result<PhotonMaps> {
-    trace_camera_maps(
-        scene,
-        settings,
-        StoreMode::All,
-        (pass as u64) << 32,
-        control,
-    )
+    trace_camera_maps(scene, settings, StoreMode::All, pass_tag(pass), control)
 }
 
 /// The estimator of one pass's maps, before its radii are set.
@@ -108,7 +92,7 @@ fn first_radii(
 /// `settings.radius` first traces pass 1's maps to find r_1 (and drops them): it costs one
 /// more photon pass, not more memory.
 pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(Vec<f32>, Stats)> {
-    // in range: Settings::validate bounds pass_index + passes by MAX_PASSES − 1
+    // in range: Settings::validate bounds pass_index + passes by MAX_PASSES − 1 (settings.rs)
     let (first, last) = (
         settings.pass_index + 1,
         settings.pass_index + settings.passes,

@@ -17,7 +17,8 @@ use crate::control::Control;
 use crate::error::Result;
 use crate::geometry::Ray;
 use crate::integrators::planar_nee::PlanarFaces;
-use crate::integrators::render::{render_tiles, Settings, Stats};
+use crate::integrators::settings::{Settings, Stats};
+use crate::integrators::tiles::render_tiles;
 use crate::integrators::transport::{cross, spawn, straight_transmittance};
 use crate::math::Frame;
 use crate::rng::Stream;
@@ -150,10 +151,10 @@ pub fn radiance_with(scene: &Scene, faces: &PlanarFaces, ray: &Ray, rng: &mut St
             }
         }
         if vertices >= RR_START {
-            // roulette only once the weight has fallen below 1, so it never grows: with the
-            // former cap at 0.95 a path in a high-albedo disc (a = 0.994, hundreds of
-            // vertices) gained 0.994 / 0.95 per vertex, ~10³ after 150 — fireflies that made
-            // volpath's Fig. 3 1-spp relative sd 24 (now 4.8) and its mean 1 % low in practice
+            // roulette only once the weight has fallen below 1, so it never grows: with a
+            // survival cap of 0.95 a path in a high-albedo disc (a = 0.994, hundreds of
+            // vertices) would gain 0.994 / 0.95 per vertex, ~10³ after 150 — fireflies that
+            // give Fig. 3 a 1-spp relative sd of 24 (4.8 with this rule) and a mean 1 % low
             let survive = beta.min(1.0);
             if rng.uniform() >= survive {
                 break;

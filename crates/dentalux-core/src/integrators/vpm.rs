@@ -32,7 +32,8 @@ use crate::error::Result;
 use crate::geometry::{Hit, Ray, Vec3};
 use crate::integrators::photon_trace::trace_camera_maps;
 use crate::integrators::photon_trace::{PhotonMaps, StoreMode};
-use crate::integrators::render::{render_tiles, Scratch, Settings, Stats};
+use crate::integrators::settings::{Settings, Stats, DEFAULT_CLIP, DEFAULT_LAYER};
+use crate::integrators::tiles::{render_tiles, Scratch};
 use crate::integrators::transport::{cross, eq13_transmittance, spawn, straight_transmittance};
 use crate::lights::Light;
 use crate::photon_map::{KernelClip, PhotonMap, Planes, PHOTON_BYTES};
@@ -51,12 +52,6 @@ const MIN_STEP_FRACTION: f64 = 1e-5;
 const RR_WEIGHT: f64 = 0.05;
 /// Default of [`VpmParams::map_threshold`].
 pub const DEFAULT_MAP_THRESHOLD: f64 = 0.3;
-/// Default of [`VpmParams::layer`]: the layer kernel's half-height over the gathering radius
-/// (0.2 and 0.5 measured the same on the slab; docs/vpm-convergence.md).
-pub const DEFAULT_LAYER: f64 = 0.3;
-/// Default of [`VpmParams::clip`]: on. On Fig. 3 it lowers the bias of averaged passes from
-/// 3.9 % to 2.8 % (rms over the image) for about 25 % more camera time (docs/vpm-convergence.md).
-pub const DEFAULT_CLIP: bool = true;
 /// Default of [`VpmParams::light_strata`].
 pub const DEFAULT_LIGHT_STRATA: u32 = 3;
 
@@ -90,7 +85,7 @@ pub struct VpmParams {
     /// Shape of the density-estimation kernel in media: 0 a sphere (the paper's); otherwise
     /// a flat cylinder along the nearer of the camera ray's entry and exit planes, half-height
     /// `layer` × the gathering radius, fitted linearly in depth where the plane cuts it
-    /// (`PhotonMap::volume_radiance_layer`). Default [`DEFAULT_LAYER`]: the sphere is up to
+    /// (`PhotonMap::volume_layer_knn`). Default [`DEFAULT_LAYER`]: the sphere is up to
     /// half too dark within its radius of a boundary, where a camera looking into a dense
     /// medium gets most of its light (−8.4 % vs the slab simulator on a slab at 4 M photons;
     /// the layer kernel −0.1 %).
@@ -310,7 +305,8 @@ impl<'a> Vpm<'a> {
                     let rho = scene.surfaces[surface as usize]
                         .reflectance(&hit, scene.shapes[hit.shape as usize].uv_scale);
                     if rho > 0.0 {
-                        l += beta * rho / PI * self.surface_irradiance(&ray, &hit, medium, rng, sc);
+                        l += beta * rho / PI
+                            * self.direct_and_map_irradiance(&ray, &hit, medium, rng, sc);
                     }
                     return l;
                 }
@@ -455,14 +451,12 @@ impl<'a> Vpm<'a> {
                 });
                 let (k, r, layer) = (self.params.k, setup.radius, self.params.layer);
                 let e = match (self.fixed_radius, planes) {
-                    (true, Some(pl)) => {
-                        map.volume_radiance_layer_radius(x, wo, &m.phase, r, layer, pl)
-                    }
-                    (true, None) => map.volume_radiance_radius(x, wo, &m.phase, r),
+                    (true, Some(pl)) => map.volume_layer_at_radius(x, wo, &m.phase, r, layer, pl),
+                    (true, None) => map.volume_sphere_at_radius(x, wo, &m.phase, r),
                     (false, Some(pl)) => {
-                        map.volume_radiance_layer(x, wo, &m.phase, k, r, layer, pl, &mut sc.nb)
+                        map.volume_layer_knn(x, wo, &m.phase, k, r, layer, pl, &mut sc.nb)
                     }
-                    (false, None) => map.volume_radiance(x, wo, &m.phase, k, r, &mut sc.nb),
+                    (false, None) => map.volume_sphere_knn(x, wo, &m.phase, k, r, &mut sc.nb),
                 };
                 sc.radius_sum += e.radius;
                 sc.estimates += 1;
@@ -475,7 +469,7 @@ impl<'a> Vpm<'a> {
 
     /// Irradiance at an opaque hit from the side the ray came from: direct light by shadow
     /// rays (through index-matched boundaries only) plus the surface photon map.
-    fn surface_irradiance(
+    fn direct_and_map_irradiance(
         &self,
         ray: &Ray,
         hit: &Hit,
@@ -520,7 +514,7 @@ impl<'a> Vpm<'a> {
             e += if self.fixed_radius {
                 self.maps
                     .surface
-                    .surface_irradiance_radius(hit.p, n, self.surface_radius)
+                    .irradiance_disc_at_radius(hit.p, n, self.surface_radius)
             } else if self.params.clip {
                 // rays along the surface start just off it, on the lit side
                 let lift = n * scene.eps;
@@ -536,12 +530,12 @@ impl<'a> Vpm<'a> {
                 let (k, r) = (self.params.k, self.surface_radius);
                 self.maps
                     .surface
-                    .surface_irradiance_clipped(hit.p, n, k, r, &mut sc.nb, &clip)
+                    .irradiance_clipped_disc_knn(hit.p, n, k, r, &mut sc.nb, &clip)
             } else {
                 let (k, r) = (self.params.k, self.surface_radius);
                 self.maps
                     .surface
-                    .surface_irradiance(hit.p, n, k, r, &mut sc.nb)
+                    .irradiance_disc_knn(hit.p, n, k, r, &mut sc.nb)
             }
             .value;
         }

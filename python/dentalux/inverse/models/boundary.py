@@ -17,24 +17,20 @@ from functools import lru_cache
 
 import numpy as np
 
+from dentalux import _core
+
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(64)
 
 
 def fresnel(cos_i: np.ndarray, m: float) -> np.ndarray:
     """Unpolarised Fresnel reflectance for incidence cosine ``cos_i`` and index ratio m = n_t/n_i.
 
-    Total internal reflection gives 1.
+    Total internal reflection gives 1. The formula is the core's (fresnel.rs), which the
+    renderers and the slab simulator use.
     """
     cos_i = np.asarray(cos_i, dtype=float)
-    sin_t2 = (1.0 - cos_i**2) / m**2
-    out = np.ones_like(cos_i)
-    ok = sin_t2 < 1.0
-    ci = cos_i[ok]
-    ct = np.sqrt(1.0 - sin_t2[ok])
-    rs = (ci - m * ct) / (ci + m * ct)
-    rp = (m * ci - ct) / (m * ci + ct)
-    out[ok] = 0.5 * (rs**2 + rp**2)
-    return out
+    r = _core.fresnel_reflectance(cos_i.ravel().tolist(), 1.0, float(m))
+    return np.asarray(r, dtype=float).reshape(cos_i.shape)
 
 
 def specular(n: float, n_out: float) -> float:
