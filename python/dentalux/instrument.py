@@ -88,7 +88,10 @@ def _number(name: str, value, lo: float, lo_open: bool, hi: float = math.inf,
 
 
 def _backing(name: str, value):
-    """A backing reflectance: a number in [0, 1] or {wavelength_nm = [...], reflectance = [...]}."""
+    """A backing reflectance: a number in [0, 1], {wavelength_nm = [...], reflectance = [...]}
+    or the (wavelengths, reflectances) pair this returns for such a table."""
+    if isinstance(value, tuple) and len(value) == 2:
+        value = {"wavelength_nm": value[0], "reflectance": value[1]}
     if isinstance(value, dict):
         try:
             wl = [float(x) for x in value["wavelength_nm"]]
