@@ -196,3 +196,30 @@ def test_shade_layered_specimen_has_the_same_keys_and_reads_like_dental_read(cap
                 ["--layer", "a:1", "--layer", "b:1", "--layer", "c:1", "--layer", "d:1"]):
         code, _, err = _shade_json(capsys, bad)
         assert code == 2 and ("layer" in err or "MATERIAL" in err), (bad, err)
+
+
+def test_bands_outside_a_materials_data_need_its_consent(tmp_path, capsys):
+    """One band rule (issue 18, item 8): the colour range and the material's data range;
+    extrapolation only where the material says so (every library entry does)."""
+    text = """[materials.narrow]
+wavelength_nm = [450.0, 600.0]
+mua = [0.1, 0.1]
+mus = [5.0, 5.0]
+g = [0.9, 0.9]
+fd = [0.0, 0.0]
+n = [1.5, 1.5]
+[materials.narrow.provenance]
+kind = "measured"
+source = "a test disc"
+"""
+    narrow = tmp_path / "narrow.toml"
+    narrow.write_text(text)
+    code, _, err = _shade_json(capsys, [str(narrow), "--bands", "500,700", "--photons", "500"])
+    assert code == 2 and "[450, 600] nm" in err and "extrapolate = true" in err, err
+    code, _, err = _shade_json(capsys, [str(narrow), "--bands", "300,500", "--photons", "500"])
+    assert code == 2 and "360" in err, err
+    narrow.write_text(text.replace("[materials.narrow]", "[materials.narrow]\nextrapolate = true"))
+    code, out, _ = _shade_json(capsys, [str(narrow), "--bands", "500,700", "--photons", "500"])
+    assert code in (0, None) and "tp" in out
+    code, out, _ = _shade_json(capsys, ["enamel", "--bands", "380,780", "--photons", "500"])
+    assert code in (0, None)

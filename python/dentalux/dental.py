@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from dentalux import instrument as instruments
+from dentalux import limits
 from dentalux.color import delta_e00, delta_e76, system
 from dentalux.progress import bar
 from dentalux.slab import Layer, simulate
@@ -291,6 +292,11 @@ def read(specimen, bands="full", instrument=None, backing_black=None, backing_wh
     if op_backing not in ("black", "white"):
         raise ValueError(f"op_backing = {op_backing!r}: allowed 'black' or 'white'")
     wl = resolve_bands(bands)
+    for m, _ in parts:  # one band rule: the colour range and each material's data range
+        known = getattr(m, "wavelength_nm", None)
+        if known is not None and len(known):
+            limits.check_bands_in(wl.tolist(), float(known[0]), float(known[-1]), m.name,
+                                  "bands", extrapolate=bool(getattr(m, "extrapolate", False)))
     rb_black = backing_spectrum(inst.backing_black, wl, "backing_black")
     rb_white = backing_spectrum(inst.backing_white, wl, "backing_white")
     contact = inst.contact_index

@@ -269,7 +269,9 @@ def check_bands_in(bands, lo: float, hi: float, what: str, name: str = "bands",
                              f"[{c_lo:g}, {c_hi:g}] nm (the colour-matching range)")
         if not extrapolate and not lo <= x <= hi:
             raise ValueError(f"{name}[{i}] = {x:g} nm is out of range for {what}: its data "
-                             f"cover [{lo:g}, {hi:g}] nm (and it allows no extrapolation)")
+                             f"cover [{lo:g}, {hi:g}] nm and it allows no extrapolation (give "
+                             "bands inside its data, or set extrapolate = true in its TOML to "
+                             "use the extrapolation rules of docs/materials.md)")
         out.append(x)
     return out
 

@@ -86,6 +86,10 @@ class Material:
     provenance: dict = field(default_factory=dict)
     description: str = ""
     ci: dict = field(default_factory=dict)
+    extrapolate: bool = False
+    """Whether bands outside ``wavelength_nm`` may be used (by the extrapolation rules of the
+    module doc): the TOML's ``extrapolate = true``; every library entry says so, a user's file
+    must say so itself (dentalux.limits.check_bands_in)."""
     """Optional confidence intervals of fitted values: ``{"mua": (N, 2) array, ...}`` from the
     file's ``mua_ci``/``mus_ci``/... keys (same units as the quantity)."""
 
@@ -175,6 +179,7 @@ class Material:
             n=self.n.copy(),
             provenance=prov,
             description=self.description,
+            extrapolate=self.extrapolate,
             ci={q: v * (float(mus_factor) if q == "mus" else float(mua_factor) if q == "mua"
                         else 1.0)
                 for q, v in self.ci.items() if not (q == "g" and g is not None)},
@@ -206,7 +211,7 @@ class Material:
         return Material(
             name=out.name, wavelength_nm=out.wavelength_nm, mua=out.mua,
             mus=self.mus * factor, g=np.where(lower, float(g), self.g), fd=out.fd, n=out.n,
-            provenance=prov, description=out.description,
+            provenance=prov, description=out.description, extrapolate=out.extrapolate,
             ci={q: v * (factor[:, None] if q == "mus" else 1.0)
                 for q, v in out.ci.items() if q != "g"},
         )
@@ -219,7 +224,7 @@ class Material:
     def to_dict(self) -> dict:
         """Plain-data form (lists, not arrays), as in the TOML file, plus the name."""
         d = {"name": self.name, "description": self.description,
-             "wavelength_nm": self.wavelength_nm.tolist()}
+             "wavelength_nm": self.wavelength_nm.tolist(), "extrapolate": self.extrapolate}
         for q in QUANTITIES:
             d[q] = getattr(self, q).tolist()
         for q, v in self.ci.items():
@@ -331,7 +336,7 @@ def _from_table(name: str, table: dict, origin: str) -> Material:
     missing = [k for k in ("wavelength_nm",) + QUANTITIES if k not in table]
     if missing:
         raise ValueError(f"{where}: missing key(s) {', '.join(missing)}")
-    known = {"description", "wavelength_nm", "provenance", *QUANTITIES,
+    known = {"description", "wavelength_nm", "provenance", "extrapolate", *QUANTITIES,
              *(f"{q}_ci" for q in QUANTITIES)}
     unknown = sorted(set(table) - known)
     if unknown:
@@ -359,8 +364,11 @@ def _from_table(name: str, table: dict, origin: str) -> Material:
             values[q] = f"{prov['kind']}: {prov.get('source', '')} (entry-level provenance)"
     prov["file"] = origin
     try:
+        extrapolate = table.get("extrapolate", False)
+        if not isinstance(extrapolate, bool):
+            raise ValueError(f"{where}.extrapolate = {extrapolate!r}: allowed true or false")
         return Material(name=name, description=str(table.get("description", "")),
-                        provenance=prov, ci=ci, **arrays)
+                        provenance=prov, ci=ci, extrapolate=extrapolate, **arrays)
     except ValueError as exc:
         raise ValueError(f"{origin}: {exc}") from None
 
