@@ -402,6 +402,7 @@ def fig_crown(out: Path, quality: Quality) -> dict:
 # the natural incisor's labial thirds: (height above the CEJ, labial face depth) [mm] in the
 # crown scene (tooth z up, labial +y towards the camera after the -90 deg turn about x)
 NATURAL_THIRDS = {"cervical": (1.7, -3.4), "middle": (5.0, -3.5), "incisal": (8.5, -1.9)}
+BOOTSTRAP = 200  # resamples for the standard error of a third's TP
 
 
 def crown_translucency(quality: Quality, half_mm: float = 0.8, seed: int = 1,
@@ -409,8 +410,8 @@ def crown_translucency(quality: Quality, half_mm: float = 0.8, seed: int = 1,
     """The natural incisor's translucency by thirds, read in the render as a TP: the crown
     scene over the black contrastor and over a white one (reflectance 0.85), both calibrated
     by the same white tile; TP = ΔE*ab between the two readings of each third. Returns
-    {third: {"lab_black", "lab_white", "tp"}} and the settings used."""
-    from dentalux.color import delta_e76
+    {third: {"lab_black", "lab_white", "tp", "tp_stderr"}}, the regions and the tile."""
+    from dentalux.color import delta_e76, spectrum_to_Lab
     from dentalux.outputs import colour_inputs
     from dentalux.scene.project import square_region
 
@@ -420,7 +421,7 @@ def crown_translucency(quality: Quality, half_mm: float = 0.8, seed: int = 1,
               for name, (y, z) in NATURAL_THIRDS.items()}
     tile = white_tile(scene, regions, quality)
     lower_anisotropy(scene, quality, bands)
-    labs = {}
+    cubes = {}
     for backdrop, surface in (("black", {"type": "black"}),
                               ("white", {"type": "lambertian", "reflectance": 0.85})):
         d = copy.deepcopy(scene)
@@ -432,16 +433,24 @@ def crown_translucency(quality: Quality, half_mm: float = 0.8, seed: int = 1,
                         volume_photons=s["volume_photons"], volume_stored=s["volume_stored"],
                         aim=s["aim"], k=s["k"], radius=s["radius"], progress=False)
         divisor, _, _ = colour_inputs(sc, bands)
-        rel = result.radiance / divisor / tile["white"]
-        from dentalux.color import spectrum_to_Lab
-
-        labs[backdrop] = {name: np.asarray(spectrum_to_Lab(
-            rel[y0:y1, x0:x1].mean(axis=(0, 1)), np.asarray(bands)))
-            for name, (x0, y0, x1, y1) in thirds.items()}
-    return {name: {"lab_black": labs["black"][name].tolist(),
-                   "lab_white": labs["white"][name].tolist(),
-                   "tp": float(delta_e76(labs["black"][name], labs["white"][name]))}
-            for name in thirds} | {"regions": thirds, "white_tile": tile}
+        cubes[backdrop] = result.radiance / divisor / tile["white"]
+    wl = np.asarray(bands)
+    rng = np.random.default_rng(seed)
+    out = {}
+    for name, (x0, y0, x1, y1) in thirds.items():
+        px = {k: c[y0:y1, x0:x1].reshape(-1, len(bands)) for k, c in cubes.items()}
+        lab = {k: np.asarray(spectrum_to_Lab(v.mean(axis=0), wl)) for k, v in px.items()}
+        # bootstrap over the region's pixels (each backdrop resampled on its own): the
+        # standard error of TP from the pixel spread
+        boot = []
+        for _ in range(BOOTSTRAP):
+            pick = {k: v[rng.integers(0, len(v), len(v))].mean(axis=0) for k, v in px.items()}
+            boot.append(delta_e76(spectrum_to_Lab(pick["black"], wl),
+                                  spectrum_to_Lab(pick["white"], wl)))
+        out[name] = {"lab_black": lab["black"].tolist(), "lab_white": lab["white"].tolist(),
+                     "tp": float(delta_e76(lab["black"], lab["white"])),
+                     "tp_stderr": float(np.std(boot, ddof=1))}
+    return out | {"regions": thirds, "white_tile": tile}
 
 
 def _annotate(src: Path, dst: Path, regions: dict, text: str) -> None:
