@@ -718,3 +718,16 @@ def test_cli_bad_input_through_the_console_script():
                           text=True, timeout=60)
     assert proc.returncode == 2
     assert "g = 1 is out of range: allowed (-1, 1)" in proc.stderr
+
+
+def test_result_fields_carry_the_cores_scalar_keys():
+    """dentalux.slab reads the scalar keys from the core (one home); SlabResult declares a
+    field for each, in the core's order."""
+    from dataclasses import fields
+
+    from dentalux import _core
+    from dentalux.slab import SCALARS, SlabResult
+
+    assert SCALARS == tuple(_core.SLAB_SCALAR_KEYS)
+    names = [f.name for f in fields(SlabResult)]
+    assert names[: len(SCALARS)] == list(SCALARS)

@@ -46,8 +46,8 @@ WORKERS_PER_CORE = 2
 # --- memory -------------------------------------------------------------------------------
 #: a request may use at most this fraction of the memory available when it starts
 MEMORY_FRACTION = 0.8
-#: bytes one stored photon takes in a photon map (position, power, direction: 20 bytes)
-PHOTON_BYTES = 20
+#: bytes one stored photon takes in a photon map (the core's record: position, power, direction)
+PHOTON_BYTES = _core.PHOTON_BYTES
 #: bytes per pixel and band of a render (the core's film, the radiance cube, previews)
 PIXEL_BAND_BYTES = 48
 #: bytes per pixel of the colour images (XYZ, sRGB, EXR buffers in float64)

@@ -16,15 +16,8 @@ from numbers import Real
 from dentalux import _core, limits
 from dentalux.progress import bar
 
-SCALARS = (
-    "specular_reflectance",
-    "diffuse_reflectance",
-    "total_reflectance",
-    "unscattered_transmittance",
-    "diffuse_transmittance",
-    "total_transmittance",
-    "absorbed",
-)
+# the result's scalar keys, in the core's order (integrators/slab.rs SCALAR_KEYS)
+SCALARS = tuple(_core.SLAB_SCALAR_KEYS)
 
 
 @dataclass(frozen=True)

@@ -14,10 +14,16 @@ use pyo3::prelude::*;
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     quiet_panics();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // facts Python reads instead of keeping copies
     m.add(
         "SLAB_MAX_PROFILE_BINS",
         dentalux_core::integrators::slab::MAX_PROFILE_BINS,
     )?;
+    m.add(
+        "SLAB_SCALAR_KEYS",
+        dentalux_core::integrators::slab::SCALAR_KEYS.to_vec(),
+    )?;
+    m.add("PHOTON_BYTES", dentalux_core::photon_map::PHOTON_BYTES)?;
     m.add_function(wrap_pyfunction!(slab::slab_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(slab::phase_sample_cos, m)?)?;
     m.add_function(wrap_pyfunction!(slab::phase_eval, m)?)?;
