@@ -161,7 +161,7 @@ def _colour_of(r_b, r_w, tt, cs, rec, op_backing):
     }
 
 
-def _propagate(colour, vals: np.ndarray, errs: np.ndarray) -> dict:
+def _propagate(colour, vals: np.ndarray, errs: np.ndarray) -> tuple[dict, dict]:
     """Metrics of ``vals`` (inputs × bands) and their standard errors by the delta method:
     ``colour`` evaluated on a batch holding ``vals`` and each input of each band moved by h."""
     h = 1e-6

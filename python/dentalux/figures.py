@@ -427,11 +427,8 @@ def crown_translucency(quality: Quality, half_mm: float = 0.8, seed: int = 1,
         d = copy.deepcopy(scene)
         d["surfaces"]["backdrop"] = surface
         sc = scene_from_dict(d)
-        s = _teeth_settings(quality)
         result = render(sc, integrator="vpm", bands=bands, seed=seed, correlated_bands=True,
-                        spp=s["spp"], photons=quality.photons,
-                        volume_photons=s["volume_photons"], volume_stored=s["volume_stored"],
-                        aim=s["aim"], k=s["k"], radius=s["radius"], progress=False)
+                        photons=quality.photons, progress=False, **_teeth_settings(quality))
         divisor, _, _ = colour_inputs(sc, bands)
         cubes[backdrop] = result.radiance / divisor / tile["white"]
     wl = np.asarray(bands)

@@ -25,24 +25,6 @@ def _bands(spec: str):
         raise ValueError(f"--bands = {spec!r}: 'full', 'paper' or comma-separated nm") from None
 
 
-def _parse_layers(specs: list[str]) -> list[tuple[str, float]]:
-    """``MATERIAL:THICKNESS`` items (top to bottom) -> [(material, thickness [mm])]."""
-    out = []
-    for i, spec in enumerate(specs):
-        name, sep, t = spec.rpartition(":")
-        try:
-            thickness = float(t) if sep else float("nan")
-        except ValueError:
-            thickness = float("nan")
-        if not name or not (thickness > 0) or thickness == float("inf"):
-            raise ValueError(f"--layer[{i}] = {spec!r}: expected MATERIAL:THICKNESS with a "
-                             "thickness > 0 [mm]")
-        out.append((name, thickness))
-    if len(out) > 3:
-        raise ValueError(f"--layer: {len(out)} layers given, allowed 1 to 3")
-    return out
-
-
 def shade_command(
     material: str = typer.Argument(None, help="material name in the library, or a TOML file "
                                    "(omit when --layer gives a layered specimen)"),
@@ -86,10 +68,10 @@ def shade_command(
     if layer:
         if material is not None:
             raise ValueError("give either MATERIAL or --layer, not both")
-        specimen = _parse_layers(layer)
-        if substrate is not None:
-            from dentalux import design
+        from dentalux import design
 
+        specimen = design.parse_fixed_layers(layer)
+        if substrate is not None:
             specimen = design.specimen(specimen, substrate)
             core = design.backings(substrate)  # an opaque core replaces both backings
             backing_black = core.get("backing_black", backing_black)

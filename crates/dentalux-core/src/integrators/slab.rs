@@ -463,6 +463,7 @@ impl<'a> Tracer<'a> {
 
     /// Tally power `w` leaving at `pos` (|cos θ| = `cos_exit` in the medium outside)
     /// against the window: inside or outside it on the top, inside it on the bottom.
+    /// Returns whether `pos` lies inside the window.
     fn exit_window(
         &self,
         win: &Window,
@@ -471,7 +472,7 @@ impl<'a> Tracer<'a> {
         w: f64,
         top: bool,
         ph: &mut Photon,
-    ) {
+    ) -> bool {
         let r2 = pos.x * pos.x + pos.y * pos.y;
         let inside = r2 <= win.viewed_radius * win.viewed_radius;
         if !top {
@@ -486,6 +487,7 @@ impl<'a> Tracer<'a> {
         } else {
             ph[N_SCALARS + instrument::OUTSIDE_R] += w;
         }
+        inside
     }
 
     /// The first-surface specular reflection of power `w` at the entry point `pos`.
@@ -493,8 +495,7 @@ impl<'a> Tracer<'a> {
         ph[SPEC] += w;
         ph[TOT_R] += w;
         if let Some(win) = &self.cfg.window {
-            self.exit_window(win, pos, cos_in, w, true, ph);
-            if pos.x * pos.x + pos.y * pos.y <= win.viewed_radius * win.viewed_radius {
+            if self.exit_window(win, pos, cos_in, w, true, ph) {
                 ph[N_SCALARS + instrument::VIEWED_SPEC] += w;
             }
         }
