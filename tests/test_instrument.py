@@ -171,6 +171,9 @@ def test_shade_contract_instrument_keys_and_infinite_as_before(capsys):
     assert set(ins) >= {"name", "geometry", "illuminated_diameter_mm", "viewed_diameter_mm",
                         "specular", "contact_index", "backing_black", "backing_white"}
     assert set(got["edge_loss"]) == {"black", "white"} and got["edge_loss"]["white"] > 0
+    code, _, err = _shade_json(capsys, [*common, "--instrument", "infinite",
+                                        "--viewed-diameter", "3"])
+    assert code == 2 and "viewed_diameter_mm" in err and "infinite" in err, err
     for bad, field in ((["--viewed-diameter", "-1"], "viewed_diameter_mm"),
                        (["--contact", "0.5"], "contact"),
                        (["--backing-white", "1.5"], "backing_white"),

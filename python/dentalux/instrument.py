@@ -226,11 +226,11 @@ class Instrument:
         bad = sorted(set(changes) - set(KEYS))
         if bad:
             raise ValueError(f"unknown instrument field {bad[0]!r}: allowed {', '.join(KEYS)}")
-        if self.is_infinite and set(changes) - {"backing_black", "backing_white",
-                                                 "contact_index"}:
-            base = replace(self, name="custom", geometry="0-d", illuminated_diameter_mm=25.4,
-                           viewed_diameter_mm=25.4)
-            return replace(base, **changes)
+        geometric = sorted(set(changes) - {"backing_black", "backing_white", "contact_index"})
+        if self.is_infinite and geometric:
+            raise ValueError(f"{geometric[0]}: the 'infinite' instrument has no lit spot, window "
+                             "or geometry to change; name a preset (dentalux instruments list) "
+                             "or a TOML file")
         name = self.name if self.name.endswith("+custom") else f"{self.name}+custom"
         if self.is_infinite:
             name = INFINITE  # the backings and contact are today's infinite-geometry options
