@@ -17,6 +17,9 @@ LONG_RUNS = {
              "--thickness", "2", "--photons", "1000000000"],
     "render": [DENTALUX, "render", str(SCENES / "discs.toml"), "--out", "{tmp}",
                "--integrator", "volpath", "--spp", "100000", "--resolution", "64x48"],
+    "render-bre": [DENTALUX, "render", str(SCENES / "discs.toml"), "--out", "{tmp}",
+                   "--integrator", "bre", "--spp", "100000", "--resolution", "64x48",
+                   "--volume-photons", "200000"],
 }
 
 

@@ -9,6 +9,7 @@ started or spawned before an input that cannot work is refused.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from numbers import Integral, Real
@@ -48,6 +49,9 @@ WORKERS_PER_CORE = 2
 MEMORY_FRACTION = 0.8
 #: bytes one stored photon takes in a photon map (the core's record: position, power, direction)
 PHOTON_BYTES = _core.PHOTON_BYTES
+# integrators that fill volume photon maps (the core's list)
+VOLUME_INTEGRATORS = tuple(i["name"] for i in json.loads(_core.settings_schema())["integrators"]
+                           if i["traces_volume_photons"])
 #: bytes per pixel and band of a render (the core's film, the radiance cube, previews)
 PIXEL_BAND_BYTES = 48
 #: bytes per pixel of the colour images (XYZ, sRGB, EXR buffers in float64)
@@ -213,7 +217,7 @@ def render_memory_bytes(width: int, height: int, bands: int, settings: dict) -> 
     integrator = settings.get("integrator")
     if integrator not in ("path", "volpath", "volpath-nee"):
         photons = float(settings.get("photons") or 0)
-        if integrator in ("vpm", "vpm-full", "ppm"):
+        if integrator in VOLUME_INTEGRATORS:
             stored = settings.get("volume_stored") or settings.get("volume_photons") or 0
             photons += float(stored)
         need += photons * PHOTON_BYTES * 1.05

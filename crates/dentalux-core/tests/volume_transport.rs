@@ -19,37 +19,16 @@ use dentalux_core::integrators::tiles::Scratch;
 use dentalux_core::integrators::volpath;
 use dentalux_core::integrators::vpm::{Vpm, VpmParams};
 use dentalux_core::lights::Light;
-use dentalux_core::medium::Medium;
 use dentalux_core::phase::PhaseFunction;
 use dentalux_core::photon_map::Neighbours;
 use dentalux_core::rng::{Stream, SURFACE_PASS};
-use dentalux_core::scene::{Boundary, Geometry, Scene, ShapeInstance};
+use dentalux_core::scene::{Boundary, Geometry, Scene};
 use dentalux_core::surface::{Mapping, Surface};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
-fn medium(mua: f64, mus: f64, g: f64, n: f64) -> Medium {
-    Medium::new(
-        "",
-        mua,
-        mus,
-        n,
-        PhaseFunction::hg_with_isotropic(g, 0.0).unwrap(),
-    )
-    .unwrap()
-}
-
-fn air() -> Medium {
-    medium(0.0, 0.0, 0.0, 1.0)
-}
-
-fn shape(g: Geometry, b: Boundary) -> ShapeInstance {
-    ShapeInstance::new("shape", g, None, b).unwrap()
-}
-
-fn camera(pos: Vec3, at: Vec3, w: usize, h: usize) -> Camera {
-    Camera::new(pos, at, Vec3::Z, 40.0, w, h).unwrap()
-}
+mod common;
+use common::{air, camera, disc_scene, disc_scene_height, medium, shape};
 
 /// Per-pixel means and variances of the mean over `spp` jittered samples.
 fn render<F: Fn(&Ray, &mut Stream) -> f64 + Sync>(
@@ -476,55 +455,6 @@ fn vpm_full_slab_matches_slab_simulator() {
             assert!(m < rt - tol, "sphere: R = {m} ± {se} vs {rt}");
         }
     }
-}
-
-/// Disc of medium (dielectric `n`) a little above a checker ribbon, lit by an area light.
-fn disc_scene(n: f64, w: usize, h: usize) -> Scene {
-    disc_scene_height(n, w, h, 2.0)
-}
-
-/// [`disc_scene`] with a disc `height` mm thick.
-fn disc_scene_height(n: f64, w: usize, h: usize, height: f64) -> Scene {
-    let ribbon = shape(
-        Geometry::Quad(Quad {
-            corner: Vec3::new(-10.0, -10.0, 0.0),
-            u: Vec3::new(20.0, 0.0, 0.0),
-            v: Vec3::new(0.0, 20.0, 0.0),
-        }),
-        Boundary::Opaque { surface: 0 },
-    );
-    let disc = shape(
-        Geometry::Cylinder(Cylinder {
-            center: Vec3::new(0.0, 0.0, 0.05),
-            axis: Vec3::Z,
-            radius: 4.0,
-            height,
-        }),
-        Boundary::Dielectric {
-            inside: 1,
-            outside: 0,
-        },
-    );
-    let light = Light::Quad {
-        corner: Vec3::new(-8.0, 8.0, 16.0),
-        u: Vec3::new(16.0, 0.0, 0.0),
-        v: Vec3::new(0.0, -16.0, 0.0),
-        radiance: 1.0,
-    };
-    Scene::new(
-        camera(Vec3::new(0.0, -11.0, 12.0), Vec3::new(0.0, 0.0, 1.0), w, h),
-        vec![air(), medium(0.2, 3.0, 0.6, n)],
-        vec![Surface::Checker {
-            a: 0.8,
-            b: 0.1,
-            size: 2.0,
-            mapping: Mapping::Xy,
-        }],
-        vec![ribbon, disc],
-        vec![light],
-        0,
-    )
-    .unwrap()
 }
 
 /// Relative difference of image means, and its standard error from the reference.

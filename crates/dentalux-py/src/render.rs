@@ -28,6 +28,9 @@ fn stats_dict<'py>(py: Python<'py>, s: &Stats) -> PyResult<Bound<'py, PyDict>> {
     d.set_item("radius", s.radius)?;
     d.set_item("rays", s.rays)?;
     d.set_item("spp", s.spp)?;
+    if !s.estimator.is_empty() {
+        d.set_item("volume_estimator", &s.estimator)?;
+    }
     for (k, v) in &s.extra {
         d.set_item(k, v)?;
     }

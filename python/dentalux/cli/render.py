@@ -55,7 +55,8 @@ def render_command(
     spp: int = typer.Option(None, help="samples per pixel (default: the scene's render.spp)"),
     photons: int = typer.Option(
         None, help="photons per band for the surface map (vpm: the volume pass's first N)"),
-    volume_photons: int = typer.Option(None, help="volume photons per band (vpm, vpm-full)"),
+    volume_photons: int = typer.Option(
+        None, help="volume photons per band (vpm, vpm-full, ppm, bre)"),
     volume_stored: int = typer.Option(
         None, "--volume-stored",
         help="photons the volume maps should hold: emit until then (at most volume-photons)"),
@@ -90,6 +91,10 @@ def render_command(
         help="clip the density kernels by every face within them (a disc's rim, curved "
              "walls, a disc standing on the ribbon), not only by the camera ray's entry and "
              "exit planes (default: on)"),
+    volume_estimator: str = typer.Option(
+        None, "--volume-estimator",
+        help="vpm, vpm-full, ppm: 'points' (eq. 11, ray marching) or 'beam' (the beam "
+             "radiance estimate; what --integrator bre uses)"),
     cluster: str = typer.Option(
         None, help="run the band x pass tasks on Dask: local:N (LocalCluster of N workers) "
                    "or tcp://HOST:PORT (a running scheduler)"),
@@ -108,7 +113,8 @@ def render_command(
                                    ("volume_stored", volume_stored), ("aim", aim), ("k", k),
                                    ("radius", radius), ("step", step), ("alpha", alpha),
                                    ("kernel_layer", kernel_layer),
-                                   ("kernel_clip", kernel_clip))
+                                   ("kernel_clip", kernel_clip),
+                                   ("volume_estimator", volume_estimator))
                if v is not None}
     common = dict(integrator=integrator, spp=spp, photons=photons, bands=band_list,
                   seed=seed, threads=threads, resolution=parse_resolution(resolution),

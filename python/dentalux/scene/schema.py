@@ -630,6 +630,8 @@ def validate_settings(d: dict, path: str = "settings") -> dict:
                               lo_open=spec["lo_open"], hi_open=spec["hi_open"])
         elif kind == "boolean":
             out[key] = boolean(value, p(key))
+        elif kind == "choice":
+            out[key] = string(value, p(key), tuple(spec["values"]))
     if out.get("threads") is not None:
         check_threads(out["threads"], p("threads"))
     return out

@@ -11,7 +11,9 @@ use crate::error::Error;
 use crate::geometry::mesh::TriangleMesh;
 use crate::geometry::shapes::{BoxShape, Cylinder, Quad, Sphere};
 use crate::geometry::transform::Transform;
-use crate::integrators::settings::{Integrator, Range, Settings, KEYS, MAX_PASSES};
+use crate::integrators::settings::{
+    Integrator, Range, Settings, VolumeEstimator, KEYS, MAX_PASSES,
+};
 use crate::lights::Light;
 use crate::medium::Medium;
 use crate::phase::PhaseFunction;
@@ -342,6 +344,10 @@ pub fn settings_from_json(text: &str) -> R<(Settings, Option<usize>)> {
         final_gather: (o.opt_with("final_gather", |n| n.boolean())?).unwrap_or(d.final_gather),
         kernel_layer: o.num_or("kernel_layer", d.kernel_layer)?,
         kernel_clip: (o.opt_with("kernel_clip", |n| n.boolean())?).unwrap_or(d.kernel_clip),
+        volume_estimator: match o.opt("volume_estimator") {
+            Some((v, p)) => VolumeEstimator::parse(Node { v, path: &p }.string()?)?,
+            None => d.volume_estimator,
+        },
     };
     let threads = o.opt_with("threads", |n| n.uint())?.map(|t| t as usize);
     o.done()?;
@@ -387,6 +393,7 @@ pub fn settings_schema() -> String {
             "final_gather" => json!(d.final_gather),
             "kernel_layer" => json!(d.kernel_layer),
             "kernel_clip" => json!(d.kernel_clip),
+            "volume_estimator" => json!(d.volume_estimator.name()),
             _ => Value::Null,
         }
     };
@@ -405,6 +412,7 @@ pub fn settings_schema() -> String {
                 Range::Positive => json!({"kind": "positive", "unit": "mm"}),
                 Range::Boolean => json!({"kind": "boolean"}),
                 Range::Integrator => json!({"kind": "integrator"}),
+                Range::Choice(values) => json!({"kind": "choice", "values": values}),
             };
             v["name"] = json!(k.name);
             v["default"] = default(k.name);

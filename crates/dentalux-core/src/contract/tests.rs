@@ -193,9 +193,12 @@ fn the_schema_lists_every_key_with_the_cores_defaults() {
             "vpm-full",
             "volpath",
             "volpath-nee",
-            "ppm"
+            "ppm",
+            "bre"
         ]
     );
+    assert_eq!(get("volume_estimator")["default"], json!("points"));
+    assert_eq!(get("volume_estimator")["values"], json!(["points", "beam"]));
     // every key the schema names is one the decoder reads: a settings object of all the
     // defaults decodes to the default settings
     let all: serde_json::Map<String, Value> = keys

@@ -21,7 +21,7 @@ use crate::control::Control;
 use crate::error::Result;
 use crate::integrators::photon_trace::PhotonMaps;
 use crate::integrators::photon_trace::{trace_camera_maps, StoreMode};
-use crate::integrators::settings::{Settings, Stats};
+use crate::integrators::settings::{Settings, Stats, VolumeEstimator};
 use crate::integrators::tiles::render_tiles;
 use crate::integrators::vpm::{default_volume_radius, Vpm, VpmParams};
 use crate::photon_map::PHOTON_BYTES;
@@ -104,6 +104,8 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
         bytes_per_photon: PHOTON_BYTES as u64,
         ..Stats::default()
     };
+    let beam = settings.estimator() == VolumeEstimator::Beam;
+    stats.estimator = settings.estimator().name().into();
     let mut r1: Option<(Vec<f64>, f64)> = None;
     if first > 1 && settings.radius.is_none() {
         // pilot: pass 1's maps give r_1, as in a render from pass 1
@@ -139,6 +141,21 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
         }
         vpm.surface_radius = surf_r1 * fs;
         vpm.fixed_radius = true;
+        if beam {
+            // the discs blur only across the ray: they shrink like a 2-D kernel, from the
+            // radius `bre` uses (settings.radius, else the vpm default: twice pass 1's r_1)
+            let t_beams = Instant::now();
+            let scale = if settings.radius.is_some() {
+                fs
+            } else {
+                2.0 * fs
+            };
+            for (m, r) in vpm.media.iter_mut().zip(vol_r1.iter()) {
+                m.radius = r * scale;
+            }
+            vpm.build_beams();
+            stats.seconds_build += t_beams.elapsed().as_secs_f64();
+        }
         let pass_settings = Settings {
             seed: pass_seed(settings.seed, pass),
             // the film continues its sub-pixel sequence where the previous pass stopped
@@ -158,6 +175,14 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
             vpm.media.iter().map(|m| m.radius).collect(),
             vpm.surface_radius,
         );
+        if beam {
+            for (i, m) in vpm.media.iter().enumerate() {
+                if scene.media[i].sigma_s > 0.0 {
+                    let key = format!("radius_medium{i}_pass{pass}");
+                    stats.extra.push((key, m.radius));
+                }
+            }
+        }
     }
     let n = settings.passes as f64;
     let image = sum.iter().map(|s| (s / n) as f32).collect();

@@ -4,9 +4,9 @@
 //! Progress (`control.done()`) counts photons traced plus pixels finished: a progress bar's
 //! total is `photons` (0 for `path`) + width × height.
 
-use super::settings::{Integrator, Settings, Stats};
+use super::settings::{Integrator, Settings, Stats, VolumeEstimator};
 use crate::control::Control;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::rng::pass_seed;
 use crate::scene::Scene;
 use std::time::Instant;
@@ -30,10 +30,22 @@ pub fn render_band(
     } else {
         settings
     };
+    if settings.estimator() == VolumeEstimator::Beam && !scene.media.iter().any(|m| m.sigma_s > 0.0)
+    {
+        let what = if settings.integrator == Integrator::Bre {
+            "settings.integrator = \"bre\"".to_string()
+        } else {
+            "settings.volume_estimator = \"beam\"".to_string()
+        };
+        return Err(Error::InvalidInput(format!(
+            "{what} estimates light scattered in media, and this scene has no scattering \
+             medium (every medium has mus = 0): use \"pm\" or \"path\""
+        )));
+    }
     let (image, mut stats) = match settings.integrator {
         Integrator::Path => super::path::render(scene, settings, control)?,
         Integrator::Pm => super::pm::render(scene, settings, control)?,
-        Integrator::Vpm => super::vpm::render(scene, settings, control, false)?,
+        Integrator::Vpm | Integrator::Bre => super::vpm::render(scene, settings, control, false)?,
         Integrator::VpmFull => super::vpm::render(scene, settings, control, true)?,
         Integrator::Volpath => super::volpath::render(scene, settings, control, false)?,
         Integrator::VolpathNee => super::volpath::render(scene, settings, control, true)?,

@@ -36,11 +36,14 @@ pub enum Integrator {
     VolpathNee,
     /// Progressive photon mapping.
     Ppm,
+    /// Volume photon mapping with the beam radiance estimate: `vpm` with
+    /// `volume_estimator = "beam"` (photon_map/beam.rs).
+    Bre,
 }
 
 impl Integrator {
     /// Every integrator with its contract name, in the order the docs list them.
-    pub const ALL: [(Integrator, &'static str); 7] = [
+    pub const ALL: [(Integrator, &'static str); 8] = [
         (Integrator::Pm, "pm"),
         (Integrator::Path, "path"),
         (Integrator::Vpm, "vpm"),
@@ -48,6 +51,7 @@ impl Integrator {
         (Integrator::Volpath, "volpath"),
         (Integrator::VolpathNee, "volpath-nee"),
         (Integrator::Ppm, "ppm"),
+        (Integrator::Bre, "bre"),
     ];
 
     /// The contract's name (`"vpm-full"`).
@@ -81,12 +85,43 @@ impl Integrator {
         )
     }
 
-    /// Whether it traces volume photons (`vpm`, `vpm-full`, `ppm`).
+    /// Whether it traces volume photons (`vpm`, `vpm-full`, `ppm`, `bre`): the integrators
+    /// a `volume_estimator` applies to.
     pub fn traces_volume_photons(self) -> bool {
         matches!(
             self,
-            Integrator::Vpm | Integrator::VpmFull | Integrator::Ppm
+            Integrator::Vpm | Integrator::VpmFull | Integrator::Ppm | Integrator::Bre
         )
+    }
+}
+
+/// How the camera pass estimates multiple scattering from a volume photon map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VolumeEstimator {
+    /// Eq. 11: ray marching with a density estimate at every step.
+    Points,
+    /// The beam radiance estimate: one query per ray segment (photon_map/beam.rs).
+    Beam,
+}
+
+impl VolumeEstimator {
+    /// The contract's names, in order.
+    pub const NAMES: [&'static str; 2] = ["points", "beam"];
+
+    /// The contract's name.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+
+    /// Parse the contract's name.
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "points" => Ok(Self::Points),
+            "beam" => Ok(Self::Beam),
+            _ => Err(Error::InvalidInput(format!(
+                "settings.volume_estimator = {name:?}: allowed \"points\", \"beam\""
+            ))),
+        }
     }
 }
 
@@ -143,6 +178,19 @@ pub struct Settings {
     /// other face within it, not only the camera ray's entry and exit planes (see
     /// `VpmParams::clip`).
     pub kernel_clip: bool,
+    /// `vpm`, `vpm-full`, `ppm`: the volume estimator (`bre` is `vpm` with the beam).
+    pub volume_estimator: VolumeEstimator,
+}
+
+impl Settings {
+    /// The volume estimator in effect: `bre` always uses the beam.
+    pub fn estimator(&self) -> VolumeEstimator {
+        if self.integrator == Integrator::Bre {
+            VolumeEstimator::Beam
+        } else {
+            self.volume_estimator
+        }
+    }
 }
 
 impl Default for Settings {
@@ -166,6 +214,7 @@ impl Default for Settings {
             final_gather: false,
             kernel_layer: DEFAULT_LAYER,
             kernel_clip: DEFAULT_CLIP,
+            volume_estimator: VolumeEstimator::Points,
         }
     }
 }
@@ -195,6 +244,8 @@ pub enum Range {
     Boolean,
     /// One of [`Integrator::ALL`]'s names.
     Integrator,
+    /// One of these names.
+    Choice(&'static [&'static str]),
 }
 
 /// One key of the settings: its name, its allowed values, and whether a scene's `[render]`
@@ -228,7 +279,7 @@ const fn unit_interval(lo_open: bool, hi_open: bool) -> Range {
 /// Every key of the settings contract, in the order the docs and error messages list them.
 /// Defaults are [`Settings::default`]'s; `threads` (worker threads, default all cores) is
 /// read by the contract decoder, not stored in [`Settings`].
-pub const KEYS: [Key; 19] = [
+pub const KEYS: [Key; 20] = [
     key("integrator", Range::Integrator, true),
     key("spp", at_least(1), true),
     key("photons", at_least(0), true),
@@ -245,6 +296,11 @@ pub const KEYS: [Key; 19] = [
     key("final_gather", Range::Boolean, true),
     key("kernel_layer", unit_interval(false, false), true),
     key("kernel_clip", Range::Boolean, true),
+    key(
+        "volume_estimator",
+        Range::Choice(&VolumeEstimator::NAMES),
+        true,
+    ),
     key("pass_index", at_least(0), false),
     key("band", at_least(0), false),
     key("threads", at_least(1), false),
@@ -305,6 +361,15 @@ impl Settings {
                 crate::error::check_range(&field, v, lo, lo_open, hi, hi_open, "")?;
             }
         }
+        if self.volume_estimator == VolumeEstimator::Beam
+            && !self.integrator.traces_volume_photons()
+        {
+            return Err(Error::InvalidInput(format!(
+                "settings.volume_estimator = \"beam\" applies to the volume photon integrators \
+                 (vpm, vpm-full, ppm, bre), not to settings.integrator = {:?}",
+                self.integrator.name()
+            )));
+        }
         Ok(())
     }
 
@@ -357,6 +422,8 @@ pub struct Stats {
     pub rays: u64,
     /// Camera samples per pixel.
     pub spp: u32,
+    /// Volume estimator (`points`, `beam`; empty for integrators without volume photons).
+    pub estimator: String,
     /// Integrator-specific figures (name, value).
     pub extra: Vec<(String, f64)>,
 }

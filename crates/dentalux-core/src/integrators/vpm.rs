@@ -32,11 +32,12 @@ use crate::error::Result;
 use crate::geometry::{Hit, Ray, Vec3};
 use crate::integrators::photon_trace::trace_camera_maps;
 use crate::integrators::photon_trace::{PhotonMaps, StoreMode};
-use crate::integrators::settings::{Settings, Stats, DEFAULT_CLIP, DEFAULT_LAYER};
+use crate::integrators::settings::{Settings, Stats, VolumeEstimator, DEFAULT_CLIP, DEFAULT_LAYER};
 use crate::integrators::tiles::{render_tiles, Scratch};
 use crate::integrators::transport::{cross, eq13_transmittance, spawn, straight_transmittance};
 use crate::lights::Light;
-use crate::photon_map::{KernelClip, PhotonMap, Planes, PHOTON_BYTES};
+use crate::photon_map::PHOTON_BYTES;
+use crate::photon_map::{BeamMap, KernelClip, PhotonMap, Planes, Segment};
 use crate::rng::Stream;
 use crate::scene::{Boundary, Scene};
 use std::f64::consts::PI;
@@ -54,6 +55,8 @@ const RR_WEIGHT: f64 = 0.05;
 pub const DEFAULT_MAP_THRESHOLD: f64 = 0.3;
 /// Default of [`VpmParams::light_strata`].
 pub const DEFAULT_LIGHT_STRATA: u32 = 3;
+/// Single-scattering points per camera-ray segment of the beam estimate (`vpm` mode).
+const SINGLE_SAMPLES: u32 = 8;
 
 /// Settings of the camera pass; `None` means "derive from the scene".
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -135,6 +138,9 @@ pub struct Vpm<'a> {
     /// Gather every photon within the radii above instead of the k nearest (progressive
     /// photon mapping sets this and the radii of its pass).
     pub fixed_radius: bool,
+    /// Per medium, the photons' disc radii for the beam radiance estimate; `None`: eq. 11's
+    /// march ([`VpmParams::beam`], [`Vpm::build_beams`]).
+    pub beams: Option<Vec<BeamMap>>,
 }
 
 /// Twice the radius of a ball holding `k` photons at the map's mean density.
@@ -252,7 +258,18 @@ impl<'a> Vpm<'a> {
             media,
             surface_radius,
             fixed_radius: false,
+            beams: None,
         }
+    }
+
+    /// Give every volume photon its disc for the beam radiance estimate: of the medium's
+    /// gathering radius ([`MediumSetup::radius`]: `settings.radius`, else the scene-derived
+    /// default of [`default_volume_radius`]).
+    pub fn build_beams(&mut self) {
+        let beams = (self.maps.volume.iter().zip(&self.media))
+            .map(|(map, setup)| BeamMap::build(map, setup.radius))
+            .collect();
+        self.beams = Some(beams);
     }
 
     /// Radiance arriving at the camera along `ray` (which starts in the ambient medium).
@@ -287,7 +304,11 @@ impl<'a> Vpm<'a> {
             }
             if sigma_t > 0.0 {
                 let exit = hit.map(|h| (h.p, if ray.d.dot(h.n) > 0.0 { h.n } else { -h.n }));
-                l += beta * self.march(&ray, medium, t_hit, [entry, exit], rng, sc);
+                l += beta
+                    * match &self.beams {
+                        Some(_) => self.beam(&ray, medium, t_hit, [entry, exit], rng, sc),
+                        None => self.march(&ray, medium, t_hit, [entry, exit], rng, sc),
+                    };
                 beta *= (-sigma_t * t_hit).exp();
                 if beta == 0.0 {
                     return l;
@@ -417,16 +438,7 @@ impl<'a> Vpm<'a> {
             let x = ray.at(s);
             let mut src = 0.0;
             if self.params.mode == StoreMode::Paper {
-                for light in &scene.lights {
-                    let Some(ls) = light.sample_li(x, rng.uniform2()) else {
-                        continue;
-                    };
-                    let t = eq13_transmittance(scene, x, ls.wi, ls.dist, medium);
-                    sc.rays += 1;
-                    if t > 0.0 {
-                        src += m.sigma_s * m.phase.eval(ls.wi.dot(ray.d)) * ls.value * t;
-                    }
-                }
+                src += self.single_scatter(x, ray.d, medium, rng, sc);
             }
             if !map.is_empty() {
                 // the nearer of the entry and exit planes orients the layer kernel
@@ -465,6 +477,97 @@ impl<'a> Vpm<'a> {
             sum += tw * src / p_map * dx;
         }
         sum
+    }
+
+    /// σs Σ_l p L_l T_l at `x` in `medium` for a camera ray along `d`: single scattering
+    /// from every light by one shadow ray each, attenuated by eq. 12 with eq. 13's
+    /// refraction correction.
+    fn single_scatter(
+        &self,
+        x: Vec3,
+        d: Vec3,
+        medium: u32,
+        rng: &mut Stream,
+        sc: &mut Scratch,
+    ) -> f64 {
+        let scene = self.scene;
+        let m = &scene.media[medium as usize];
+        let mut src = 0.0;
+        for light in &scene.lights {
+            let Some(ls) = light.sample_li(x, rng.uniform2()) else {
+                continue;
+            };
+            let t = eq13_transmittance(scene, x, ls.wi, ls.dist, medium);
+            sc.rays += 1;
+            if t > 0.0 {
+                src += m.sigma_s * m.phase.eval(ls.wi.dot(d)) * ls.value * t;
+            }
+        }
+        src
+    }
+
+    /// ∫_0^t_end e^(−σt s) S(x(s)) ds along `ray` in `medium` without marching: single
+    /// scattering (`vpm` mode) at [`SINGLE_SAMPLES`] points drawn from the truncated
+    /// exponential e^(−σt s) on [0, t_end] (stratified; unbiased), multiple scattering by
+    /// one beam radiance estimate over the segment (photon_map/beam.rs), its photons cut
+    /// by the planes where the ray entered and leaves the medium.
+    fn beam(
+        &self,
+        ray: &Ray,
+        medium: u32,
+        t_end: f64,
+        planes: [Option<(Vec3, Vec3)>; 2],
+        rng: &mut Stream,
+        sc: &mut Scratch,
+    ) -> f64 {
+        let m = &self.scene.media[medium as usize];
+        if m.sigma_s <= 0.0 {
+            return 0.0;
+        }
+        let sigma_t = m.sigma_t();
+        let mut l = 0.0;
+        if self.params.mode == StoreMode::Paper {
+            // F = 1 − e^(−σt T): s = −ln(1 − u F)/σt has density σt e^(−σt s)/F on [0, T]
+            let f = -(-sigma_t * t_end).exp_m1();
+            let n = SINGLE_SAMPLES as f64;
+            for j in 0..SINGLE_SAMPLES {
+                let u = (j as f64 + rng.uniform()) / n;
+                let s = -(-u * f).ln_1p() / sigma_t;
+                let x = ray.at(s.min(t_end));
+                l += f / sigma_t * self.single_scatter(x, ray.d, medium, rng, sc) / n;
+            }
+        }
+        let map = &self.maps.volume[medium as usize];
+        if !map.is_empty() {
+            let Some(b) = self.beams.as_ref().map(|b| &b[medium as usize]) else {
+                return l;
+            };
+            let scene = self.scene;
+            let hit = |o: Vec3, d: Vec3, t_max: f64| {
+                scene.intersect(&Ray::new(o, d), t_max).map(|h| (h.p, h.n))
+            };
+            let clip = self.params.clip.then(|| KernelClip {
+                hit: &hit,
+                u: rng.uniform(),
+            });
+            let e = b.estimate(
+                map,
+                &Segment {
+                    o: ray.o,
+                    d: ray.d,
+                    t_end,
+                    entry: planes[0],
+                    exit: planes[1],
+                    sigma_t,
+                    phase: &m.phase,
+                    clip,
+                },
+            );
+            sc.estimates += 1;
+            sc.radius_sum += b.radius();
+            l += e.value;
+        }
+        l
     }
 
     /// Irradiance at an opaque hit from the side the ray came from: direct light by shadow
@@ -568,7 +671,13 @@ pub fn render(
         clip: settings.kernel_clip,
         ..VpmParams::default()
     };
-    let vpm = Vpm::new(scene, &maps, params);
+    let mut vpm = Vpm::new(scene, &maps, params);
+    let t_beams = Instant::now();
+    let beam = settings.estimator() == VolumeEstimator::Beam;
+    if beam {
+        vpm.build_beams();
+    }
+    let seconds_beams = t_beams.elapsed().as_secs_f64();
     let t0 = Instant::now();
     let (image, totals) = render_tiles(scene, settings, control, |ray, rng, sc| {
         vpm.radiance(ray, rng, sc)
@@ -587,16 +696,19 @@ pub fn render(
     ];
     for (i, m) in vpm.media.iter().enumerate() {
         if scene.media[i].sigma_s > 0.0 {
-            extra.push((format!("step_medium{i}"), m.step));
+            if !beam {
+                extra.push((format!("step_medium{i}"), m.step));
+            }
             extra.push((format!("radius_medium{i}"), m.radius));
         }
     }
     Ok((
         image,
         Stats {
-            integrator: if full { "vpm-full" } else { "vpm" }.into(),
+            integrator: settings.integrator.name().into(),
+            estimator: settings.estimator().name().into(),
             seconds_photons: maps.trace_seconds,
-            seconds_build: maps.build_seconds,
+            seconds_build: maps.build_seconds + seconds_beams,
             seconds_camera: t0.elapsed().as_secs_f64(),
             photons_emitted: maps.emitted,
             photons_stored: maps.stored() as u64,

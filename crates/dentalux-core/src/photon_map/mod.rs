@@ -31,13 +31,17 @@
 //! < 3 GB; an implicit median tree is the classic photon-map structure (Jensen 2001) and is
 //! short.
 
+pub mod beam;
 pub mod estimators;
 pub mod kernel;
 pub mod tree;
 
+pub use beam::{BeamEstimate, BeamMap, Face, Segment};
 pub use estimators::Estimate;
 pub use kernel::{KernelClip, Planes};
 pub use tree::{Neighbours, Photon, PhotonMap, PHOTON_BYTES};
 
+#[cfg(test)]
+mod beam_tests;
 #[cfg(test)]
 mod tests;

@@ -7,7 +7,7 @@ use crate::math::Vec3;
 pub const PHOTON_BYTES: usize = std::mem::size_of::<Photon>();
 
 /// Subtrees at most this long are scanned linearly instead of descended.
-const LEAF: usize = 16;
+pub(super) const LEAF: usize = 16;
 /// Subtrees at least this long are built in parallel (rayon::join).
 const PAR_BUILD: usize = 16_384;
 /// Bits per octahedral coordinate.

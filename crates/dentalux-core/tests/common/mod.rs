@@ -1,0 +1,84 @@
+//! Scene builders shared by the integration tests: media, shapes, a camera, and the
+//! disc-on-a-checker scene the volume integrators are judged on.
+#![allow(dead_code)]
+
+use dentalux_core::camera::Camera;
+use dentalux_core::geometry::shapes::{Cylinder, Quad};
+use dentalux_core::geometry::Vec3;
+use dentalux_core::lights::Light;
+use dentalux_core::medium::Medium;
+use dentalux_core::phase::PhaseFunction;
+use dentalux_core::scene::{Boundary, Geometry, Scene, ShapeInstance};
+use dentalux_core::surface::{Mapping, Surface};
+
+pub fn medium(mua: f64, mus: f64, g: f64, n: f64) -> Medium {
+    Medium::new(
+        "",
+        mua,
+        mus,
+        n,
+        PhaseFunction::hg_with_isotropic(g, 0.0).unwrap(),
+    )
+    .unwrap()
+}
+
+pub fn air() -> Medium {
+    medium(0.0, 0.0, 0.0, 1.0)
+}
+
+pub fn shape(g: Geometry, b: Boundary) -> ShapeInstance {
+    ShapeInstance::new("shape", g, None, b).unwrap()
+}
+
+pub fn camera(pos: Vec3, at: Vec3, w: usize, h: usize) -> Camera {
+    Camera::new(pos, at, Vec3::Z, 40.0, w, h).unwrap()
+}
+
+/// Disc of medium (dielectric `n`) a little above a checker ribbon, lit by an area light.
+pub fn disc_scene(n: f64, w: usize, h: usize) -> Scene {
+    disc_scene_height(n, w, h, 2.0)
+}
+
+/// [`disc_scene`] with a disc `height` mm thick.
+pub fn disc_scene_height(n: f64, w: usize, h: usize, height: f64) -> Scene {
+    let ribbon = shape(
+        Geometry::Quad(Quad {
+            corner: Vec3::new(-10.0, -10.0, 0.0),
+            u: Vec3::new(20.0, 0.0, 0.0),
+            v: Vec3::new(0.0, 20.0, 0.0),
+        }),
+        Boundary::Opaque { surface: 0 },
+    );
+    let disc = shape(
+        Geometry::Cylinder(Cylinder {
+            center: Vec3::new(0.0, 0.0, 0.05),
+            axis: Vec3::Z,
+            radius: 4.0,
+            height,
+        }),
+        Boundary::Dielectric {
+            inside: 1,
+            outside: 0,
+        },
+    );
+    let light = Light::Quad {
+        corner: Vec3::new(-8.0, 8.0, 16.0),
+        u: Vec3::new(16.0, 0.0, 0.0),
+        v: Vec3::new(0.0, -16.0, 0.0),
+        radiance: 1.0,
+    };
+    Scene::new(
+        camera(Vec3::new(0.0, -11.0, 12.0), Vec3::new(0.0, 0.0, 1.0), w, h),
+        vec![air(), medium(0.2, 3.0, 0.6, n)],
+        vec![Surface::Checker {
+            a: 0.8,
+            b: 0.1,
+            size: 2.0,
+            mapping: Mapping::Xy,
+        }],
+        vec![ribbon, disc],
+        vec![light],
+        0,
+    )
+    .unwrap()
+}
