@@ -273,7 +273,8 @@ def test_target_tp_is_reported(mats):
     (["--layer", "E:0.2-0.4", "--target-tp", "-1"], "target_tp"),
     (["--layer", "E:0.2-0.4", "--substrate", "bone"], "substrate"),
     (["--layer", "E:0.2-0.4", "--substrate", "zirconia", "--target-tp", "5"], "TP is 0"),
-    (["--layer", "E:0.2-0.4", "--render", "out"], "not implemented"),
+    (["--layer", "E:0.2-0.4", "--substrate", "zirconia", "--render", "out"],
+     "cannot be rendered"),
     (["--layer", "E:0.2-0.4", "--plot", "plane.png"], "exactly 2 layers"),
     (["--layer", "E:0.2-0.4", "--layer", "D:0.2-0.4", "--plot", "plane.txt"], "end in .png"),
 ])

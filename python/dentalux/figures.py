@@ -25,6 +25,7 @@ import math
 import shutil
 import time
 from dataclasses import asdict, dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -305,10 +306,22 @@ def lights_45_0(centre, dist_mm: float, elevation_deg: float, size_mm: float,
     return lights
 
 
-def crown_scene(quality: Quality) -> tuple[dict, dict]:
+@lru_cache(maxsize=4)
+def _crown_surfaces(layers_mm: tuple, resolution: float) -> list:
+    from dentalux.teeth.incisor import crown_surfaces
+
+    return crown_surfaces(layers_mm, resolution)
+
+
+def crown_scene(quality: Quality, layers=None, core=None) -> tuple[dict, dict]:
     """A natural incisor (image left) and the same tooth whose enamel volume is replaced by
     the biomaterial: a full-coverage crown on the natural dentin (image right). Returns the
-    scene and the image regions (labial thirds of each crown) for the colour comparison."""
+    scene and the image regions (labial thirds of each crown) for the colour comparison.
+
+    ``layers``: the crown's shells instead, [(scene medium, labial thickness [mm])] top to
+    bottom (a designed crown, :mod:`dentalux.design.render`), on a preparation as deep as
+    their total (:func:`dentalux.teeth.incisor.crown_surfaces`) filled with ``core`` (a scene
+    medium; None: the natural tooth's dentin). None: the figure's crown."""
     up = {"axis": [1.0, 0.0, 0.0], "angle_deg": -90.0}
     w, h = quality.resolution
 
@@ -317,13 +330,28 @@ def crown_scene(quality: Quality) -> tuple[dict, dict]:
                 "enamel": enamel_medium, "dentin": "dentin", "outside": "air",
                 "transform": {"rotate": [up], "translate": [x, 0.0, 0.0]}}
 
+    def layered_crown(media):
+        # nested closed meshes: shell i lies between surface i and i + 1, the core inside
+        # the last; each surface's outside is the shell above it (air for the outer one)
+        shells = [f"crown {i + 1}" for i in range(len(layers))]
+        media.update({name: dict(m) for name, (m, _) in zip(shells, layers, strict=True)})
+        if core is not None:
+            media["crown core"] = dict(core)
+        inside = shells + ["dentin" if core is None else "crown core"]
+        surfaces = _crown_surfaces(tuple(float(t) for _, t in layers),
+                                   float(quality.tooth_resolution_mm))
+        place = {"rotate": [up], "translate": [-6.5, 0.0, 0.0]}  # as tooth(-6.5, ...)
+        return [{"type": "mesh", "name": f"crown surface {i}", "positions": v,
+                 "triangles": f, "inside": inside[i],
+                 "outside": "air" if i == 0 else inside[i - 1], "transform": place}
+                for i, (v, f) in enumerate(surfaces)]
+
     fov, eye_y, dist = 30.0, 3.0, 60.0
     scene = {
         "scene": {"name": "crown", "description": "biomaterial crown beside a natural incisor"},
         "camera": {"position": [0.0, eye_y, -dist], "look_at": [0.0, eye_y, 0.0],
                    "up": [0.0, 1.0, 0.0], "fov_deg": fov, "resolution": [w, h]},
-        "media": {"enamel": {"material": "enamel"}, "dentin": {"material": "dentin"},
-                  "crown": {"material": "biomaterial-table1"}},
+        "media": {"enamel": {"material": "enamel"}, "dentin": {"material": "dentin"}},
         # a black contrastor behind the teeth, as in dental shade photography: light that
         # passes through the enamel-only incisal edge is lost, so the edge's translucency
         # shows (against a grey or white background it reads only as a greyer rim)
@@ -333,7 +361,6 @@ def crown_scene(quality: Quality) -> tuple[dict, dict]:
              "u": [120.0, 0.0, 0.0], "v": [0.0, 80.0, 0.0], "surface": "backdrop"},
             # +x is on the image's left (see the regions below): natural left, crown right
             tooth(6.5, "enamel"),
-            tooth(-6.5, "crown"),
         ],
         # 45°/0° geometry, as a dental spectrophotometer measures: two 16 mm square lights
         # 45° left and right of the labial faces' normal, 15° above it, 50 mm away; the
@@ -341,6 +368,11 @@ def crown_scene(quality: Quality) -> tuple[dict, dict]:
         # measured middle third (one large light above the camera put its highlight there)
         "lights": lights_45_0([0.0, 5.0, -3.5], 50.0, 15.0, 16.0, 16.0),
     }
+    if layers is None:
+        scene["media"]["crown"] = {"material": "biomaterial-table1"}
+        scene["shapes"].append(tooth(-6.5, "crown"))
+    else:
+        scene["shapes"] += layered_crown(scene["media"])
     # the measured squares on the labial faces (z ≈ -3.5 mm after the rotation), placed by
     # the render's own camera: it looks along +z with +y up, so +x (the crown) is on the
     # image's left. (Until 2026-12-01 the squares were placed as if +x were on the right,
@@ -358,7 +390,8 @@ def white_tile(scene: dict, regions: dict, quality: Quality, z_mm: float = -3.5)
     from dentalux.outputs import colour_inputs
 
     d = copy.deepcopy(scene)
-    d["shapes"] = [s for s in d["shapes"] if s["type"] != "tooth"]
+    # no teeth: neither tooth entries nor a layered crown's meshes (dielectric, "inside")
+    d["shapes"] = [s for s in d["shapes"] if s["type"] != "tooth" and "inside" not in s]
     d["media"] = {}
     d["surfaces"]["white_tile"] = {"type": "lambertian", "reflectance": 1.0}
     d["shapes"].append({"type": "quad", "name": "white tile", "corner": [-30.0, -30.0, z_mm],

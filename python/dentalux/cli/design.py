@@ -40,13 +40,19 @@ def design_command(
     seed: int = typer.Option(1, help="random seed"),
     threads: int = typer.Option(None, help="worker threads (default: all cores)"),
     plot: str = typer.Option(None, help="write the ΔE00 plane of a two-layer design (PNG)"),
-    render: str = typer.Option(None, help="render the designed crown (not implemented)"),
+    render: str = typer.Option(None, help="render the best design's crown beside a natural "
+                               "incisor into folder DIR (its files are replaced) and print the "
+                               "rendered ΔE00 beside the predicted one"),
+    render_quality: str = typer.Option("draft", help="with --render: draft | preview | paper"),
+    render_repeats: int = typer.Option(1, help="with --render: independent renders averaged "
+                                       "(from 2 on their spread is the error)"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
 ) -> None:
     """Rank layer thicknesses by ΔE00 to a target, verified by the full Monte Carlo."""
-    if render is not None:
-        raise ValueError("--render: rendering the designed crown is not implemented yet "
-                         "(docs/design.md); drop --render")
+    if render is not None:  # refuse a bad folder or substrate before the search
+        from dentalux.design import render as design_render
+
+        design_render.check(render, substrate, render_quality, render_repeats)
     if plot is not None:
         from dentalux.design.plot import check_path
 
@@ -60,8 +66,17 @@ def design_command(
         from dentalux.design.plot import plane
 
         plane(res, plot)
+    rendered = None
+    if render is not None:
+        rendered = design_render.render_design(res, render, quality=render_quality,
+                                               repeats=render_repeats, seed=seed,
+                                               threads=threads,
+                                               progress=False if as_json else None)
     if as_json:
-        print(json.dumps(res.to_json(), allow_nan=False))
+        out = res.to_json()
+        if rendered is not None:
+            out["render"] = _render_json(rendered)
+        print(json.dumps(out, allow_nan=False))
         return
     t = res.target
     table = Table(title=f"designs for L*a*b* {t.lab[0]:.2f} {t.lab[1]:.2f} {t.lab[2]:.2f}"
@@ -84,6 +99,23 @@ def design_command(
     console.print(f"search {res.search_seconds:.1f} s, verification {res.verify_seconds:.1f} s")
     if plot:
         console.print(f"plot: {plot}")
+    if rendered is not None:
+        r, p = rendered["rendered"], rendered["predicted"]
+        console.print(f"ΔE00 crown vs natural incisor, design 1: rendered {r['delta_e00']:.2f} ± "
+                      f"{r['delta_e00_stderr']:.2f}, predicted {p['delta_e00']:.2f} ± "
+                      f"{p['delta_e00_stderr']:.2f} (rendered L*a*b* crown "
+                      + " ".join(f"{x:.1f}" for x in r["lab"]["crown"]) + ", natural "
+                      + " ".join(f"{x:.1f}" for x in r["lab"]["natural"])
+                      + f"; {rendered['seconds']:.0f} s)")
+        console.print(f"render: {rendered['files']['annotated_png']}, "
+                      f"{rendered['files']['render_json']}")
+
+
+def _render_json(report: dict) -> dict:
+    """The ``render`` key of ``--json``: the comparison and the files (render.json in DIR
+    holds the rest: settings, regions, white tile, timings)."""
+    keys = ("rendered", "predicted", "rendered_minus_predicted", "crown", "files", "seconds")
+    return {k: report[k] for k in keys}
 
 
 def register(app: typer.Typer) -> None:

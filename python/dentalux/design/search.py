@@ -53,6 +53,11 @@ class DesignResult:
     photons: int
     plane: dict | None = None
     surface: Surface | None = field(default=None, repr=False)
+    # what a render of a design needs (dentalux.design.render): the resolved layer
+    # materials (top to bottom), the cement (material, mm) or None, the bands [nm]
+    parts: list = field(default_factory=list, repr=False)
+    cement: tuple | None = field(default=None, repr=False)
+    bands: list = field(default_factory=list, repr=False)
 
     def to_json(self) -> dict:
         return {"target": self.target.to_json(), "designs": self.designs,
@@ -330,4 +335,5 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
         search_cpu_seconds=search_cpu, verify_cpu_seconds=time.process_time() - cpu0 - search_cpu,
         substrate=substrate,
         layers=[{"material": n, "range_mm": list(r)} for n, r in zip(names, ranges, strict=True)],
-        photons=surface.photons, plane=plane, surface=surface)
+        photons=surface.photons, plane=plane, surface=surface, parts=parts, cement=cement,
+        bands=[float(b) for b in wl])

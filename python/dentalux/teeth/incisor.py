@@ -43,18 +43,8 @@ _LINGUAL = [0.95, 2.0, 2.95, 3.55, 3.55, 2.5, 1.55, 1.05, 0.6, 0.25]
 _EXPONENT = [2.2, 2.2, 2.2, 2.4, 2.6, 2.9, 3.0, 3.0, 3.0]
 
 
-def incisor(resolution: float = 0.2, root_layer_mm: float = 0.08,
-            labial_enamel_mm: float = 0.9, incisal_enamel_mm: float = 1.8) -> Tooth:
-    """Build the incisor on a grid of node spacing ``resolution`` [mm] (0.2 mm gives about
-    27 k triangles per surface). ``root_layer_mm``: gap between the surfaces over the root
-    and the enamel thickness at the CEJ; ``labial_enamel_mm``: labial enamel in the incisal
-    two thirds (lingual 2/3 of it); ``incisal_enamel_mm``: enamel above the dentin at the
-    incisal edge."""
-    for key, v, lo, hi in (("root_layer_mm", root_layer_mm, 0.01, 0.5),
-                           ("labial_enamel_mm", labial_enamel_mm, 0.1, 2.0),
-                           ("incisal_enamel_mm", incisal_enamel_mm, 0.2, 4.0)):
-        if not (isinstance(v, int | float) and lo <= v <= hi):
-            raise ValueError(f"{key} = {v!r} is out of range: allowed [{lo}, {hi}] mm")
+def _fields(resolution: float, root_layer_mm: float, labial_mm: float, incisal_mm: float):
+    """The grid, the outer surface's field and the dentin's field (module doc)."""
     grid = Grid.around((-4.6, -4.0, -ROOT_LENGTH_MM - 0.3), (4.6, 3.8, CROWN_LENGTH_MM + 0.3),
                        resolution)
     x, y, z = grid.points()
@@ -72,9 +62,29 @@ def incisor(resolution: float = 0.2, root_layer_mm: float = 0.08,
     # thickness field: lateral enamel grows from the CEJ to the incisal two thirds;
     # lingual enamel is 2/3 of labial (smooth in y)
     side = 0.8333 + 0.1667 * np.tanh(y / 1.0)
-    lateral = root_layer_mm + (labial_enamel_mm * side - root_layer_mm) * smoothstep(0.0, 4.5, z)
-    inner = smax(smax(sec + lateral, incisal + incisal_enamel_mm, 0.6),
+    lateral = root_layer_mm + (labial_mm * side - root_layer_mm) * smoothstep(0.0, 4.5, z)
+    inner = smax(smax(sec + lateral, incisal + incisal_mm, 0.6),
                  apex + root_layer_mm, 1.2)
+    return grid, outer, inner
+
+
+def _check(**values) -> None:
+    for key, (v, lo, hi) in values.items():
+        if not (isinstance(v, int | float) and lo <= v <= hi):
+            raise ValueError(f"{key} = {v!r} is out of range: allowed [{lo}, {hi}] mm")
+
+
+def incisor(resolution: float = 0.2, root_layer_mm: float = 0.08,
+            labial_enamel_mm: float = 0.9, incisal_enamel_mm: float = 1.8) -> Tooth:
+    """Build the incisor on a grid of node spacing ``resolution`` [mm] (0.2 mm gives about
+    27 k triangles per surface). ``root_layer_mm``: gap between the surfaces over the root
+    and the enamel thickness at the CEJ; ``labial_enamel_mm``: labial enamel in the incisal
+    two thirds (lingual 2/3 of it); ``incisal_enamel_mm``: enamel above the dentin at the
+    incisal edge."""
+    _check(root_layer_mm=(root_layer_mm, 0.01, 0.5),
+           labial_enamel_mm=(labial_enamel_mm, 0.1, 2.0),
+           incisal_enamel_mm=(incisal_enamel_mm, 0.2, 4.0))
+    grid, outer, inner = _fields(resolution, root_layer_mm, labial_enamel_mm, incisal_enamel_mm)
     tooth = Tooth(
         name="incisor",
         enamel=extract(outer, grid),
@@ -90,3 +100,31 @@ def incisor(resolution: float = 0.2, root_layer_mm: float = 0.08,
                 "labial_enamel_mm": labial_enamel_mm, "incisal_enamel_mm": incisal_enamel_mm},
     )
     return tooth
+
+
+def crown_surfaces(layers_mm, resolution: float = 0.2, root_layer_mm: float = 0.08,
+                   incisal_mm: float = 1.8) -> list:
+    """An incisor crowned with shells of labial thickness ``layers_mm`` (top to bottom):
+    nested closed meshes, the outer surface (the natural tooth's), each interface and the
+    prepared dentin's surface. The preparation is the natural dentin surface of
+    :func:`incisor` with ``labial_enamel_mm`` = the shells' total (lingual 2/3 of it,
+    tapering to ``root_layer_mm`` at the CEJ, as a crown's margin does) and at least
+    ``incisal_mm`` under the incisal edge; interface k lies at the fraction (shells 1..k) /
+    total of the way from the outer field to the dentin field. Both fields are first-order
+    distances on the faces, so on the labial face shell k is ``layers_mm[k]`` thick; and as
+    the dentin field exceeds the outer one everywhere (by >= ``root_layer_mm``), every
+    interface lies strictly between them: the meshes are disjoint."""
+    layers_mm = [float(t) for t in layers_mm]
+    total = sum(layers_mm)
+    if not layers_mm or any(t <= 0 for t in layers_mm):
+        raise ValueError(f"layers_mm = {layers_mm!r}: give one or more thicknesses > 0 [mm]")
+    _check(total_mm=(total, max(0.1, 2 * root_layer_mm), 2.0),
+           root_layer_mm=(root_layer_mm, 0.01, 0.5), incisal_mm=(incisal_mm, 0.2, 4.0))
+    grid, outer, inner = _fields(resolution, root_layer_mm, total, max(incisal_mm, total))
+    out = [extract(outer, grid)]
+    done = 0.0
+    for t in layers_mm[:-1]:
+        done += t
+        f = done / total
+        out.append(extract((1.0 - f) * outer + f * inner, grid))
+    return out + [extract(inner, grid)]
