@@ -215,7 +215,7 @@ def _region_slices(name, rect, height, width):
 
 def write_images(radiance, wavelengths_nm, out_dir, illuminant="D65", regions=None,
                  exposure=None, observer="2", white=1.0, tone="clip",
-                 reconstruction=None) -> dict:
+                 reconstruction=None, region_extra=None) -> dict:
     """Write ``image.png``, ``image.exr``, ``spectral.exr`` and ``colour.json`` to ``out_dir``.
 
     ``radiance``: H x W x bands, the rendered radiance per band relative to the light's own
@@ -229,8 +229,9 @@ def write_images(radiance, wavelengths_nm, out_dir, illuminant="D65", regions=No
     ``regions``: ``{name: [x0, y0, x1, y1]}`` pixel rectangles (x1, y1 exclusive); colour.json
     gives for each the CIELAB of the region's mean spectral radiance (the colour a
     spectrophotometer aperture would read, not a mean of per-pixel L*a*b*).
-    ``exposure`` in stops (None: automatic, 99th luminance percentile -> 1). Returns the
-    dictionary written to colour.json (with the file paths).
+    ``region_extra(lab)``, when given, returns more keys for a region's entry (the nearest
+    shade tabs). ``exposure`` in stops (None: automatic, 99th luminance percentile -> 1).
+    Returns the dictionary written to colour.json (with the file paths).
     """
     from dentalux import io as dio
 
@@ -276,6 +277,7 @@ def write_images(radiance, wavelengths_nm, out_dir, illuminant="D65", regions=No
         mean = cube[rows, cols].reshape(-1, len(wl)).mean(axis=0) / float(white)
         lab = cs.spectrum_to_Lab(mean, wl, reconstruction)
         summary["regions"][name] = {"rect": [int(v) for v in rect], "lab": lab.tolist(),
-                                    "mean_radiance": mean.tolist()}
+                                    "mean_radiance": mean.tolist(),
+                                    **(region_extra(lab) if region_extra else {})}
     Path(paths["json"]).write_text(dumps_strict(summary, indent=2))
     return summary

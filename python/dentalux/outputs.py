@@ -58,15 +58,36 @@ def colour_inputs(scene: Scene, bands: list[float]) -> tuple[np.ndarray, str, fl
     return divisor, illuminant, float(white)
 
 
+def region_matcher(guide: str | None):
+    """For a shade guide, the function that gives a measured region's nearest tabs
+    (``shade_match``: tab and ΔE00, nearest first) and the geometry they were read in; None
+    without a guide. Checks up front that the guide exists and has published values."""
+    if guide is None:
+        return None
+    from dentalux.shade_guides import nearest
+
+    nearest((50.0, 0.0, 0.0), guide)  # an unknown guide or one without values fails here
+
+    def extra(lab) -> dict:
+        return {"shade_match": [{"tab": t, "delta_e00": de} for t, de in nearest(lab, guide)],
+                "shade_match_guide": guide,
+                "shade_match_geometry": "the render's own lights and camera, mean spectrum "
+                                        "of the region"}
+    return extra
+
+
 def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None = None,
                          scene_file: str | None = None, warn=None,
-                         white: float | None = None, write_json: bool = True) -> dict:
+                         white: float | None = None, write_json: bool = True,
+                         match: str | None = None) -> dict:
     """Write radiance.npy, previews, colour images and render.json for a RenderResult;
     returns the render.json dictionary. ``white``: the radiance (relative to the light's
     spectrum) that counts as L* = 100, e.g. a white tile measured in the same geometry; the
     image is then exposed so that this white is display white. Default: the brightest
     light's radiance, with automatic exposure. ``write_json=False`` leaves render.json to a
-    caller that adds to the dictionary first (it is then written once)."""
+    caller that adds to the dictionary first (it is then written once). ``match``: a shade
+    guide whose nearest tabs (ΔE00) each measured region's entry in colour.json gets as
+    ``shade_match``, read in the render's own geometry (its lights and camera)."""
     from dentalux.color import write_images
 
     out = Path(out)
@@ -98,7 +119,8 @@ def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None =
         summary["colour"] = write_images(result.radiance / divisor, result.bands, out,
                                          illuminant=illuminant, regions=regions,
                                          exposure=None if white is None else 0.0,
-                                         white=light_white if white is None else white)
+                                         white=light_white if white is None else white,
+                                         region_extra=region_matcher(match))
     except ValueError as exc:  # e.g. too few bands for a colour image
         summary["colour_error"] = str(exc)
         if warn:

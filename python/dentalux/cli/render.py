@@ -16,7 +16,7 @@ from pathlib import Path
 import typer
 
 from dentalux.output_paths import check_out_dir, rebase, staged_dir
-from dentalux.outputs import dumps_strict, peak_memory_bytes, write_render_outputs
+from dentalux.outputs import dumps_strict, peak_memory_bytes, region_matcher, write_render_outputs
 from dentalux.render import render
 from dentalux.scene.load import load_scene
 from dentalux.scene.schema import INTEGRATORS
@@ -95,6 +95,10 @@ def render_command(
         None, "--volume-estimator",
         help="vpm, vpm-full, ppm: 'points' (eq. 11, ray marching) or 'beam' (the beam "
              "radiance estimate; what --integrator bre uses)"),
+    match: str = typer.Option(
+        None, "--match",
+        help="a shade guide (see `dentalux shade --help`): colour.json gives each measured "
+             "region's nearest tabs with their ΔE00"),
     cluster: str = typer.Option(
         None, help="run the band x pass tasks on Dask: local:N (LocalCluster of N workers) "
                    "or tcp://HOST:PORT (a running scheduler)"),
@@ -108,6 +112,15 @@ def render_command(
     t0 = time.perf_counter()
     out = check_out_dir(out, "--out", overwrite=overwrite)
     scene = load_scene(scene_file, allow_outside_paths=allow_outside_paths)
+    if match is not None:
+        if not scene.description.get("regions"):
+            raise ValueError(f"--match {match}: the scene has no [regions] to measure")
+        res = parse_resolution(resolution)
+        if res is not None and tuple(res) != tuple(scene.resolution):
+            raise ValueError(f"--match {match}: the scene's regions are in its own pixels "
+                             f"({scene.resolution[0]}x{scene.resolution[1]}); drop "
+                             f"--resolution {resolution} to measure them")
+        region_matcher(match)  # the guide is checked before the render starts
     band_list = parse_bands(bands)
     options = {k_: v for k_, v in (("volume_photons", volume_photons),
                                    ("volume_stored", volume_stored), ("aim", aim), ("k", k),
@@ -127,7 +140,7 @@ def render_command(
     warn = None if as_json else (lambda msg: print(msg, file=sys.stderr))
     with staged_dir(out, "--out") as stage:
         summary = write_render_outputs(scene, result, stage, scene_file=str(scene_file),
-                                       warn=warn, write_json=False)
+                                       warn=warn, write_json=False, match=match)
         summary = rebase(summary, stage, out)
         if progressive:
             summary["progressive"] = _finite(result.stats["progressive"])
@@ -150,6 +163,12 @@ def render_command(
             print(f"{pr['passes']} passes ({pr['stop']}) on {pr['executor']} "
                   f"({pr['workers']} worker(s)), error estimate {err}"
                   + (f", last radius: {radii}" if radii else ""))
+        for name, reg in summary.get("colour", {}).get("regions", {}).items():
+            if "shade_match" in reg:
+                tabs = ", ".join(f"{m['tab']} (ΔE00 {m['delta_e00']:.2f})"
+                                 for m in reg["shade_match"])
+                print(f"region {name}: L*a*b* {', '.join(f'{v:.1f}' for v in reg['lab'])}; "
+                      f"nearest {match} tabs: {tabs}")
         print(f"wrote {out}/radiance.npy, render.json, previews"
               + (", colour images" if "colour" in summary else ""))
 
