@@ -788,7 +788,7 @@ def test_cli_render_hands_equal_energy_radiance_to_colour(fake_core, tmp_path, m
     seen = {}
 
     def fake_write_images(radiance, wavelengths_nm, out_dir, illuminant="D65", regions=None,
-                          exposure=None, white=1.0):
+                          exposure=None, white=1.0, region_extra=None):
         seen.update(radiance=np.array(radiance), bands=list(wavelengths_nm),
                     illuminant=illuminant, white=white)
         return {"illuminant": illuminant}

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import functools
 
-NATIVE = ("slab_simulate", "render_band", "camera_project", "phase_sample_cos", "phase_eval",
-          "panic_in_worker")
+NATIVE = ("slab_simulate", "render_band", "camera_project", "shape_contains",
+          "phase_sample_cos", "phase_eval", "panic_in_worker")
 
 
 def guarded(fn, name: str):

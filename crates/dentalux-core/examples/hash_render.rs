@@ -9,6 +9,8 @@ fn main() {
     let (s, _) = settings_from_json(&std::fs::read_to_string(&a[2]).unwrap()).unwrap();
     let (img, _) = render_band(&scene, &s, &Control::new()).unwrap();
     let mut h = std::collections::hash_map::DefaultHasher::new();
-    for v in &img { v.to_bits().hash(&mut h); }
+    for v in &img {
+        v.to_bits().hash(&mut h);
+    }
     println!("{} {:016x}", a[2], h.finish());
 }

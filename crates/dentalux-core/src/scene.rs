@@ -257,20 +257,7 @@ impl ShapeInstance {
             Geometry::Box(b) => b.contains(q),
             Geometry::Cylinder(c) => c.contains(q),
             Geometry::Quad(_) => false,
-            Geometry::Mesh(m) => {
-                if !self.closed {
-                    return false;
-                }
-                // parity of crossings along an arbitrary, non-axis direction
-                let d = Vec3::new(0.5773, 0.5774, 0.5775).normalize();
-                let mut crossings = 0;
-                for i in 0..m.len() {
-                    if m.intersect_triangle(i, p, d, f64::INFINITY).is_some() {
-                        crossings += 1;
-                    }
-                }
-                crossings % 2 == 1
-            }
+            Geometry::Mesh(m) => self.closed && m.encloses(q),
         }
     }
 }

@@ -2,6 +2,7 @@
 //! runs long calls without the GIL on a worker thread, and turns core errors into Python
 //! exceptions. It holds no physics.
 
+mod geometry;
 mod physics;
 mod render;
 mod runner;
@@ -30,6 +31,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(physics::fresnel_reflectance, m)?)?;
     m.add_function(wrap_pyfunction!(render::render_band, m)?)?;
     m.add_function(wrap_pyfunction!(render::camera_project, m)?)?;
+    m.add_function(wrap_pyfunction!(geometry::shape_contains, m)?)?;
     m.add_function(wrap_pyfunction!(render::settings_schema, m)?)?;
     m.add_function(wrap_pyfunction!(render::photons_traced, m)?)?;
     m.add_function(wrap_pyfunction!(panic_in_worker, m)?)?;

@@ -3,7 +3,8 @@ triangles [mm] for the render contract.
 
 A mesh that bounds a dielectric medium must be closed and consistently oriented; one whose
 triangles all face inwards (negative enclosed volume) is flipped so that normals point out of
-the ``inside`` medium, which is the orientation the core assumes.
+the ``inside`` medium, which is the orientation the core assumes. Whether a point lies inside
+a mesh is the core's test (:func:`point_inside`).
 """
 
 from __future__ import annotations
@@ -88,33 +89,11 @@ def check_closed(data: MeshData, path: str) -> MeshData:
     return data
 
 
-def is_closed(data: MeshData) -> bool:
-    """Whether the mesh is watertight (positions merged by coordinate)."""
-    import trimesh
-
-    return bool(trimesh.Trimesh(data.positions, data.triangles, process=True).is_watertight)
-
-
 def point_inside(data: MeshData, point) -> bool:
-    """Whether ``point`` lies inside a closed mesh: the parity of the triangles crossed by a
-    ray from it (Moller-Trumbore, vectorised). The ray's direction is skewed so that it
-    almost surely misses edges and vertices."""
-    p = np.asarray(point, dtype=float)
-    lo, hi = data.positions.min(axis=0), data.positions.max(axis=0)
-    if np.any(p <= lo) or np.any(p >= hi):
-        return False
-    d = np.array([0.5377, 0.6151, 0.5767])
-    d /= np.linalg.norm(d)
-    v0, v1, v2 = (data.positions[data.triangles[:, i]] for i in range(3))
-    e1, e2 = v1 - v0, v2 - v0
-    pvec = np.cross(d, e2)
-    det = np.einsum("ij,ij->i", e1, pvec)
-    ok = np.abs(det) > 1e-300
-    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-    tvec = p - v0
-    u = np.einsum("ij,ij->i", tvec, pvec) * inv
-    qvec = np.cross(tvec, e1)
-    v = (qvec @ d) * inv
-    t = np.einsum("ij,ij->i", e2, qvec) * inv
-    hits = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
-    return bool(np.count_nonzero(hits) % 2 == 1)
+    """Whether ``point`` lies strictly inside the mesh (an open one has no inside): the core's
+    test, as for a scene's shapes (:func:`dentalux.scene.resolve.shape_contains`)."""
+    from dentalux.scene.resolve import shape_contains  # resolve imports this module
+
+    shape = {"type": "mesh", "positions": data.positions, "triangles": data.triangles,
+             "boundary": {"kind": "opaque", "surface": 0}}
+    return bool(shape_contains(shape, [point])[0])

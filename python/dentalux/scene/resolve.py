@@ -22,8 +22,9 @@ from typing import Any
 
 import numpy as np
 
+from dentalux import _core
 from dentalux.scene import transform as tf
-from dentalux.scene.meshes import MeshData, check_closed, is_closed, load_mesh, point_inside
+from dentalux.scene.meshes import MeshData, check_closed, load_mesh
 from dentalux.scene.schema import MEDIUM_FALLBACK, SceneError, fail, spectrum_at
 from dentalux.scene.validate import validate
 
@@ -114,6 +115,20 @@ def _identity_or(m: np.ndarray) -> list[list[float]]:
     return [[float(x) for x in row] for row in m]
 
 
+def _contract_json(shape: dict) -> str:
+    """A contract shape dict (mesh arrays as numpy) as the JSON the core reads."""
+    return json.dumps(shape, separators=(",", ":"), default=to_plain)
+
+
+def shape_contains(shape: dict, points) -> np.ndarray:
+    """Whether each of ``points`` (n, 3) [mm] lies strictly inside ``shape``, one entry of the
+    render contract's ``shapes``. The core decides (``_core.shape_contains``), so the scene
+    checks and the render share one geometry; quads and meshes that are not watertight have
+    no inside."""
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
+    return np.array(_core.shape_contains(_contract_json(shape), pts.tolist()), dtype=bool)
+
+
 def camera_contract(cam: dict, width: int, height: int) -> dict:
     """The render contract's camera object from a validated scene camera."""
     return {"position": cam["position"], "look_at": cam["look_at"], "up": cam["up"],
@@ -143,6 +158,7 @@ class Scene:
         self._images = self._load_images()
         self._shapes = [self._shape(i, s) for i, s in enumerate(d["shapes"])]
         self._shapes_json: str | None = None
+        self._shape_texts: list[str | None] = [None] * len(self._shapes)
         self._shapes_plain: list | None = None
         self._check_camera()
         self._check_nesting()
@@ -291,36 +307,41 @@ class Scene:
             out["transform"] = _identity_or(m)
         return out
 
-    def _contains(self, shape: dict, point: np.ndarray, meshes: bool = False) -> bool:
-        """Whether ``point`` lies strictly inside a sphere, box or cylinder, or with
-        ``meshes`` a closed mesh (open meshes have no inside)."""
-        if shape["type"] == "quad" or (shape["type"] == "mesh" and not meshes):
-            return False
-        p = tf.apply_point(np.linalg.inv(np.asarray(shape["transform"])), point)
-        if shape["type"] == "mesh":
-            data = MeshData(shape["positions"], shape["triangles"])
-            return point_inside(data, p) and is_closed(data)
-        if shape["type"] == "sphere":
-            return bool(np.linalg.norm(p - shape["center"]) < shape["radius"])
-        if shape["type"] == "box":
-            return bool(np.all(p > shape["min"]) and np.all(p < shape["max"]))
-        rel = p - np.asarray(shape["center"])
-        h = float(rel @ np.asarray(shape["axis"]))
-        radial = np.linalg.norm(rel - h * np.asarray(shape["axis"]))
-        return bool(0.0 < h < shape["height"] and radial < shape["radius"])
+    def _shape_text(self, i: int) -> str:
+        """Shape ``i`` as contract JSON, serialised once for the inside tests and to_json."""
+        text = self._shape_texts[i]
+        if text is None:
+            text = self._shape_texts[i] = _contract_json(self._shapes[i])
+        return text
+
+    def _inside(self, i: int, points) -> np.ndarray:
+        """Whether each of ``points`` (n, 3) lies strictly inside shape ``i`` (the core's test,
+        as :func:`shape_contains`). A mesh is asked only about points within its bounds:
+        nothing beyond them is inside, and serialising a tooth's mesh costs more than all the
+        checks together."""
+        pts = np.asarray(points, dtype=float).reshape(-1, 3)
+        ask = np.ones(len(pts), dtype=bool)
+        if self._shapes[i]["type"] == "mesh":
+            c = self._corners(self._shapes[i])
+            pad = 1e-9 * (1.0 + float(np.abs(c).max()))  # rounding of the transform
+            ask = np.all((pts > c.min(axis=0) - pad) & (pts < c.max(axis=0) + pad), axis=1)
+        out = np.zeros(len(pts), dtype=bool)
+        if ask.any():
+            out[ask] = _core.shape_contains(self._shape_text(i), pts[ask].tolist())
+        return out
 
     def _check_camera(self) -> None:
         cam = self.description["camera"]
-        pos = np.asarray(cam["position"], dtype=float)
+        inside = [bool(self._inside(i, [cam["position"]])[0]) for i in range(len(self._shapes))]
         for i, shape in enumerate(self._shapes):
-            if not self._contains(shape, pos, meshes=True):
+            if not inside[i]:
                 continue
             b = self.description["shapes"][i]["boundary"]
             if b["kind"] == "opaque":
                 raise fail("camera.position", cam["position"],
                            f"inside the opaque shapes[{i}] ({shape['type']}); move the camera "
                            "out of it")
-            if b["inside"] != cam["medium"] and not self._medium_ok(pos, cam["medium"]):
+            if b["inside"] != cam["medium"] and not self._medium_ok(inside, cam["medium"]):
                 raise fail("camera.medium", cam["medium"],
                            f"the camera is inside shapes[{i}], whose inside medium is "
                            f"'{b['inside']}'; set camera.medium = '{b['inside']}'")
@@ -375,8 +396,8 @@ class Scene:
                 frac = []
                 for k, other in ((i, j), (j, i)):
                     pts = self._box_points(shapes[k], self.CROSSING_SAMPLES, interior=True)
-                    inside = [p for p in pts if self._contains(shapes[k], p)]
-                    hits = sum(self._contains(shapes[other], p) for p in inside)
+                    inside = pts[self._inside(k, pts)]
+                    hits = int(np.count_nonzero(self._inside(other, inside)))
                     frac.append(hits / max(1, len(inside)))
                 if max(frac) == 1.0 or max(frac) == 0.0:
                     continue  # nested (possibly sharing a face), apart or touching
@@ -389,7 +410,8 @@ class Scene:
         """Lights emit into the scene's ambient medium, so a light inside a dielectric shape
         (a point light inside a disc) is refused rather than traced in the wrong medium."""
         desc = self.description
-        for li, lt in enumerate(desc["lights"]):
+        where = []
+        for lt in desc["lights"]:
             if lt["type"] in ("point", "spot"):
                 pos = np.asarray(lt["position"], float)
             elif lt["type"] == "disc":
@@ -397,10 +419,12 @@ class Scene:
             else:
                 pos = np.asarray(lt["corner"], float) + 0.5 * (np.asarray(lt["u"], float)
                                                                + np.asarray(lt["v"], float))
-            for i, shape in enumerate(self._shapes):
-                if desc["shapes"][i]["boundary"]["kind"] != "dielectric":
-                    continue
-                if self._contains(shape, pos, meshes=True):
+            where.append(pos)
+        inside = {i: self._inside(i, where) for i, s in enumerate(desc["shapes"])
+                  if s["boundary"]["kind"] == "dielectric"}
+        for li in range(len(where)):
+            for i in inside:
+                if inside[i][li]:
                     raise SceneError(
                         f"lights[{li}]: lies inside shapes[{i}] (a dielectric "
                         f"{desc['shapes'][i]['type']}); lights emit into the ambient medium, "
@@ -429,7 +453,7 @@ class Scene:
                     continue
                 if corners is None:
                     corners = self._corners(shapes[i])
-                if all(self._contains(shapes[j], c) for c in corners):
+                if self._inside(j, corners).all():
                     containers.append(j)
             if not containers:
                 continue
@@ -441,12 +465,12 @@ class Scene:
                            f"shapes[{i}] lies inside shapes[{j}], whose inside medium is "
                            f"'{want}'; set outside = '{want}'")
 
-    def _medium_ok(self, pos: np.ndarray, medium: str) -> bool:
-        """Whether some dielectric shape containing ``pos`` has ``medium`` inside (nesting)."""
-        for i, shape in enumerate(self._shapes):
-            b = self.description["shapes"][i]["boundary"]
-            if b["kind"] == "dielectric" and b["inside"] == medium \
-                    and self._contains(shape, pos, meshes=True):
+    def _medium_ok(self, inside: list[bool], medium: str) -> bool:
+        """Whether some dielectric shape containing the camera (``inside``: per shape) has
+        ``medium`` inside (nesting)."""
+        for i, s in enumerate(self.description["shapes"]):
+            b = s["boundary"]
+            if b["kind"] == "dielectric" and b["inside"] == medium and inside[i]:
                 return True
         return False
 
@@ -546,7 +570,8 @@ class Scene:
         """:meth:`resolve` as the JSON string ``render_band`` takes. The shapes (band
         independent, and large for meshes) are serialised once and reused for every band."""
         if self._shapes_json is None:
-            self._shapes_json = json.dumps(self._shapes, separators=(",", ":"),
-                                           default=to_plain)
+            # json.dumps(self._shapes)'s bytes, from the texts the inside tests serialised
+            texts = [self._shape_text(i) for i in range(len(self._shapes))]
+            self._shapes_json = "[" + ",".join(texts) + "]"
         head = json.dumps(self._band(wavelength_nm, resolution), separators=(",", ":"))
         return head[:-1] + ',"shapes":' + self._shapes_json + "}"

@@ -4,7 +4,10 @@
 //! unknown keys are refused. The binding passes the strings through; the core's own
 //! constructors check the values' ranges.
 
+mod inside;
 mod json;
+
+pub use inside::shape_contains;
 
 use crate::camera::Camera;
 use crate::error::Error;
@@ -162,9 +165,22 @@ fn transform(o: &mut Obj) -> R<Option<Transform>> {
 }
 
 fn shape(mut o: Obj, n_surfaces: usize, n_media: usize) -> R<ShapeInstance> {
+    let (g, tr, b) = shape_parts(&mut o, n_surfaces, n_media)?;
+    let path = o.path.clone();
+    o.done()?;
+    ShapeInstance::new(&path, g, tr, b)
+}
+
+/// The geometry, transform and boundary of the shape object `o`, unvalidated (the caller
+/// refuses unknown keys and builds the [`ShapeInstance`]).
+fn shape_parts(
+    o: &mut Obj,
+    n_surfaces: usize,
+    n_media: usize,
+) -> R<(Geometry, Option<Transform>, Boundary)> {
     let t = o.string("type")?;
-    let b = boundary(&mut o, n_surfaces, n_media)?;
-    let tr = transform(&mut o)?;
+    let b = boundary(o, n_surfaces, n_media)?;
+    let tr = transform(o)?;
     let g = match t.as_str() {
         "sphere" => Geometry::Sphere(Sphere {
             center: o.vec3("center")?,
@@ -186,11 +202,11 @@ fn shape(mut o: Obj, n_surfaces: usize, n_media: usize) -> R<ShapeInstance> {
             height: o.positive("height", "mm")?,
         }),
         "mesh" => {
-            let positions = list_of(&mut o, "positions")?
+            let positions = list_of(o, "positions")?
                 .into_iter()
                 .map(|(v, p)| Node { v, path: &p }.vec3())
                 .collect::<R<Vec<_>>>()?;
-            let triangles = list_of(&mut o, "triangles")?
+            let triangles = list_of(o, "triangles")?
                 .into_iter()
                 .map(|(v, p)| {
                     let idx = Node { v, path: &p }.fixed::<3>()?;
@@ -207,7 +223,7 @@ fn shape(mut o: Obj, n_surfaces: usize, n_media: usize) -> R<ShapeInstance> {
             let uvs = match o.opt("uvs") {
                 None => None,
                 Some(_) => Some(
-                    list_of(&mut o, "uvs")?
+                    list_of(o, "uvs")?
                         .into_iter()
                         .map(|(v, p)| Node { v, path: &p }.fixed::<2>())
                         .collect::<R<Vec<_>>>()?,
@@ -221,12 +237,10 @@ fn shape(mut o: Obj, n_surfaces: usize, n_media: usize) -> R<ShapeInstance> {
         }
         other => {
             let allowed = ["sphere", "quad", "box", "cylinder", "mesh"];
-            return unknown_type(&o, other, &allowed);
+            return unknown_type(o, other, &allowed);
         }
     };
-    let path = o.path.clone();
-    o.done()?;
-    ShapeInstance::new(&path, g, tr, b)
+    Ok((g, tr, b))
 }
 
 fn light(mut o: Obj) -> R<Light> {

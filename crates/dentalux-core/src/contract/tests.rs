@@ -2,6 +2,7 @@
 //! path, unknown keys with the list of allowed ones (the messages Python users see).
 
 use super::*;
+use crate::geometry::Vec3;
 use serde_json::json;
 
 /// A glass sphere in air on a checker floor under a disc light, camera looking down.
@@ -227,4 +228,121 @@ fn photons_traced_follows_the_integrator() {
     assert_eq!(s(Integrator::Pm, 0).photons_traced(), 10);
     assert_eq!(s(Integrator::Vpm, 0).photons_traced(), 110);
     assert_eq!(s(Integrator::Ppm, 40).photons_traced(), 50);
+}
+
+/// `shape_contains` of `shape` at `points`, unwrapped.
+fn inside(shape: &Value, points: &[[f64; 3]]) -> Vec<bool> {
+    let pts: Vec<Vec3> = points.iter().map(|p| Vec3::from_array(*p)).collect();
+    shape_contains(&shape.to_string(), &pts).unwrap()
+}
+
+/// The unit cube [0, 1]³, outward-wound (tests/test_scene.py's CUBE_OBJ).
+fn cube(boundary: Value) -> Value {
+    json!({"type": "mesh",
+           "positions": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
+                         [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
+           "triangles": [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
+                         [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]],
+           "boundary": boundary})
+}
+
+#[test]
+fn analytic_shapes_contain_strictly() {
+    let opaque = json!({"kind": "opaque", "surface": 0});
+    let sphere = json!({"type": "sphere", "center": [0, 0, 1], "radius": 1.0,
+                        "boundary": opaque});
+    let got = inside(
+        &sphere,
+        &[[0.0, 0.0, 1.0], [0.0, 0.0, 1.99], [0.0, 0.0, 2.0]],
+    );
+    assert_eq!(got, [true, true, false]);
+    let b = json!({"type": "box", "min": [0, 0, 0], "max": [1, 2, 3], "boundary": opaque});
+    let got = inside(&b, &[[0.5, 1.0, 1.5], [1.0, 1.0, 1.5], [0.5, 2.5, 1.5]]);
+    assert_eq!(got, [true, false, false]);
+    // a non-unit axis is normalised, as in the scene
+    let cyl = json!({"type": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 2], "radius": 1.0,
+                     "height": 2.0, "boundary": opaque});
+    let got = inside(&cyl, &[[0.9, 0.0, 1.0], [0.0, 0.0, 2.1], [1.1, 0.0, 1.0]]);
+    assert_eq!(got, [true, false, false]);
+    let quad = json!({"type": "quad", "corner": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0],
+                      "boundary": opaque});
+    assert_eq!(inside(&quad, &[[0.5, 0.5, 0.0]]), [false]);
+}
+
+#[test]
+fn transformed_shapes_contain_in_world_space() {
+    // 90° about x (object z -> world -y), then 5 mm along x
+    let rot = json!([[1, 0, 0, 5], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]]);
+    let cyl = json!({"type": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 1], "radius": 1.0,
+                     "height": 2.0, "boundary": {"kind": "dielectric", "inside": 1, "outside": 0},
+                     "transform": rot});
+    let got = inside(
+        &cyl,
+        &[
+            [5.0, -1.0, 0.5],
+            [5.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [5.0, -1.0, 1.5],
+        ],
+    );
+    assert_eq!(got, [true, false, false, false]);
+    // a sphere stretched twice along x: an ellipsoid
+    let stretch = json!([[2, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]);
+    let ell = json!({"type": "sphere", "center": [0, 0, 0], "radius": 1.0,
+                     "boundary": {"kind": "opaque", "surface": 0}, "transform": stretch});
+    assert_eq!(
+        inside(&ell, &[[1.9, 0.0, 0.0], [0.0, 1.1, 0.0]]),
+        [true, false]
+    );
+}
+
+#[test]
+fn meshes_contain_only_when_watertight() {
+    let opaque = json!({"kind": "opaque", "surface": 0});
+    let mut m = cube(opaque.clone());
+    // as tests/test_scene.py places it: scale 4, then to [-2, 2] x [-32, -28] x [8, 12]
+    m["transform"] = json!([[4, 0, 0, -2], [0, 4, 0, -32], [0, 0, 4, 8], [0, 0, 0, 1]]);
+    let got = inside(
+        &m,
+        &[[0.5, -29.5, 10.5], [0.5, -33.0, 10.5], [0.5, 0.5, 0.5]],
+    );
+    assert_eq!(got, [true, false, false]);
+    let centre = [[0.5, 0.5, 0.5]];
+    let mut open = cube(opaque.clone());
+    open["triangles"].as_array_mut().unwrap().truncate(10);
+    assert_eq!(inside(&open, &centre), [false]);
+    // a vertex duplicated as along a uv seam: still a solid, even as a dielectric (whose
+    // closedness by index is the scene decoder's check, not this one's)
+    let mut seam = cube(json!({"kind": "dielectric", "inside": 7, "outside": 0}));
+    seam["positions"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!([1, 1, 1]));
+    seam["triangles"][2] = json!([4, 5, 8]);
+    assert_eq!(inside(&seam, &centre), [true]);
+    assert_eq!(inside(&seam, &[]), Vec::<bool>::new());
+}
+
+#[test]
+fn a_lone_shape_is_refused_with_its_key_path() {
+    let err = |s: &str| shape_contains(s, &[Vec3::ZERO]).unwrap_err().to_string();
+    let sphere = json!({"type": "sphere", "center": [0, 0, 0], "radius": 1.0,
+                        "boundary": {"kind": "opaque", "surface": 0}, "colour": 1});
+    assert_eq!(
+        err(&sphere.to_string()),
+        "shape.colour: unknown key; allowed: boundary, center, radius, transform, type"
+    );
+    assert!(err("{").starts_with("shape JSON is malformed"));
+    let got = err(r#"{"type": "sphere", "center": [0, 0, 0], "radius": -1,
+                      "boundary": {"kind": "opaque", "surface": 0}}"#);
+    assert!(got.starts_with("shape.radius"), "{got}");
+    let mut m = cube(json!({"kind": "opaque", "surface": 0}));
+    m["triangles"][0] = json!([0, 2, 9]);
+    let got = err(&m.to_string());
+    assert!(
+        got.starts_with("shape.triangles[0] = [0, 2, 9] refers to a vertex"),
+        "{got}"
+    );
+    let got = err(r#"{"type": "torus", "boundary": {"kind": "opaque", "surface": 0}}"#);
+    assert!(got.starts_with("shape.type: \"torus\": allowed"), "{got}");
 }

@@ -1,7 +1,8 @@
 //! Triangle meshes (already in world space: the scene bakes a mesh's transform into its
 //! positions), Möller–Trumbore intersection, and the topology checks a dielectric boundary
 //! needs: closed (every edge shared by exactly two triangles) and consistently oriented
-//! (each shared edge traversed once in each direction), outward normals by positive volume.
+//! (each shared edge traversed once in each direction), outward normals by positive volume;
+//! and the inside test of a watertight mesh (ray-crossing parity).
 
 use super::shapes::LocalHit;
 use super::{Aabb, Vec3};
@@ -126,6 +127,46 @@ impl TriangleMesh {
             })
             .sum()
     }
+    /// Whether every edge is shared by exactly two triangles once positions equal to
+    /// 10⁻⁸ mm are merged, orientation aside: closed as a solid, though a file may duplicate
+    /// vertices along uv seams ([`topology`](Self::topology) counts by index). The grid is
+    /// trimesh's (`tol.merge`, ties to even), by which Python's scene checks judge a mesh
+    /// file closed, so both call the same meshes closed.
+    pub fn is_watertight(&self) -> bool {
+        let key = |x: f64| (x * 1e8).round_ties_even() as i64;
+        let mut ids: HashMap<[i64; 3], u32> = HashMap::with_capacity(self.positions.len());
+        let merged: Vec<u32> = (self.positions.iter())
+            .map(|p| {
+                let next = ids.len() as u32;
+                *ids.entry([key(p.x), key(p.y), key(p.z)]).or_insert(next)
+            })
+            .collect();
+        let mut edges: HashMap<(u32, u32), u32> = HashMap::with_capacity(self.len() * 3);
+        for t in &self.triangles {
+            for k in 0..3 {
+                let (a, b) = (merged[t[k] as usize], merged[t[(k + 1) % 3] as usize]);
+                *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+        }
+        edges.values().all(|&n| n == 2)
+    }
+    /// Whether `p` lies strictly inside the bounds of the positions and an odd number of
+    /// triangles lie on a ray from it: inside, for a watertight mesh. The ray is skewed off
+    /// the axes and diagonals so that it almost surely misses edges and vertices.
+    pub fn encloses(&self, p: Vec3) -> bool {
+        let b = (self.positions.iter()).fold(Aabb::EMPTY, |b, &q| b.grow(q));
+        if !(p.cmpgt(b.min).all() && p.cmplt(b.max).all()) {
+            return false;
+        }
+        let d = Vec3::new(0.5377, 0.6151, 0.5767).normalize();
+        let crossings = (0..self.len())
+            .filter(|&i| {
+                let [a, b, c] = self.corners(i);
+                intersect_corners(a, b, c, p, d, f64::INFINITY).is_some()
+            })
+            .count();
+        crossings % 2 == 1
+    }
     /// Reverse every triangle's winding (turn inward normals outward).
     pub fn flip(&mut self) {
         for t in &mut self.triangles {
@@ -244,6 +285,37 @@ mod tests {
         assert!(m
             .intersect_triangle(0, Vec3::new(0.8, 0.8, -1.0), Vec3::Z, 10.0)
             .is_none());
+    }
+
+    #[test]
+    fn watertight_merges_duplicated_positions() {
+        let m = tetra();
+        assert!(m.is_watertight());
+        // corner 0 duplicated (as a uv seam does): open by index, closed as a solid
+        let mut seam = m.clone();
+        seam.positions.push(Vec3::new(0.0, 0.0, 1e-9));
+        seam.triangles[0] = [4, 2, 1];
+        seam.triangles[2] = [4, 3, 2];
+        assert!(matches!(seam.topology(), Topology::Open { .. }));
+        assert!(seam.is_watertight());
+        // winding does not matter, a missing triangle does
+        let mut bad = m.clone();
+        bad.triangles[3].swap(1, 2);
+        assert!(bad.is_watertight());
+        let mut open = m.clone();
+        open.triangles.pop();
+        assert!(!open.is_watertight());
+    }
+
+    #[test]
+    fn encloses_by_parity() {
+        let m = TriangleMesh::uv_sphere(Vec3::new(1.0, 2.0, 3.0), 2.0, 32, 64);
+        assert!(m.encloses(Vec3::new(1.0, 2.0, 3.0)));
+        assert!(m.encloses(Vec3::new(2.5, 2.0, 3.0)));
+        assert!(!m.encloses(Vec3::new(3.5, 2.0, 3.0)));
+        // outside the bounds, and on them
+        assert!(!m.encloses(Vec3::new(1.0, 2.0, 10.0)));
+        assert!(!m.encloses(Vec3::new(1.0, 2.0, 5.0)));
     }
 
     #[test]
