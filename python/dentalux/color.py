@@ -23,9 +23,9 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
-import colour
 import numpy as np
 
+from dentalux._lazy import colour
 from dentalux.strict_json import dumps_strict
 
 OBSERVERS = {

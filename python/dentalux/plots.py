@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import colour
 import matplotlib
 
 matplotlib.use("Agg")
@@ -12,6 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from dentalux import spectra  # noqa: E402
+from dentalux._lazy import colour  # noqa: E402
 
 
 def fig2_spd(out_dir, stem: str = "fig2_spd", grid=None) -> dict[str, str]:

@@ -33,8 +33,9 @@ import csv
 from functools import lru_cache
 from pathlib import Path
 
-import colour
 import numpy as np
+
+from dentalux._lazy import colour
 
 PAPER_BANDS = (450.0, 540.0, 605.0)
 BASES = ("zero", "hold", "constant", "linear")

@@ -9,7 +9,6 @@ from rich.console import Console
 from rich.table import Table
 
 from dentalux import instrument as instruments
-from dentalux.design import optimise, search
 
 
 def _bands(spec: str):
@@ -32,7 +31,8 @@ def design_command(
     instrument: str = typer.Option(instruments.DEFAULT, help="instrument preset or TOML file"),
     target_tp: float = typer.Option(None, help="translucency target TP00"),
     bands: str = typer.Option("full", help="'full', 'full:STEP', 'paper' or nm list"),
-    photons: int = typer.Option(search.DEFAULT_PHOTONS, help="photons per band and run"),
+    photons: int = typer.Option(
+        None, help="photons per band and run (default: dentalux.design.search's)"),
     verify_photons: int = typer.Option(None, help="photons for the verification (default "
                                        "--photons)"),
     designs: int = typer.Option(3, help="how many designs to report"),
@@ -49,6 +49,10 @@ def design_command(
     as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
 ) -> None:
     """Rank layer thicknesses by ΔE00 to a target, verified by the full Monte Carlo."""
+    # the design package pulls in scipy's interpolation: imported here, not at start-up
+    from dentalux.design import optimise, search
+
+    photons = search.DEFAULT_PHOTONS if photons is None else photons
     if render is not None:  # refuse a bad folder or substrate before the search
         from dentalux.design import render as design_render
 

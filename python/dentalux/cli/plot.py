@@ -6,10 +6,11 @@ import json
 
 import typer
 
-from dentalux import plots
 from dentalux.output_paths import check_out_dir, rebase, staged_dir
 
-FIGURES = {"spd": plots.fig2_spd}
+# figure name -> the function of dentalux.plots that draws it (imported when drawn:
+# matplotlib and colour-science are slow to import)
+FIGURES = {"spd": "fig2_spd"}
 
 
 def plot_command(
@@ -21,9 +22,11 @@ def plot_command(
     """Draw a figure and write it as PNG and SVG into --out."""
     if figure not in FIGURES:
         raise ValueError(f"figure = {figure!r}: allowed {', '.join(FIGURES)}")
+    from dentalux import plots
+
     out = check_out_dir(out, "--out", overwrite=True)
     with staged_dir(out, "--out") as stage:
-        paths = rebase(FIGURES[figure](stage), stage, out)
+        paths = rebase(getattr(plots, FIGURES[figure])(stage), stage, out)
     print(json.dumps(paths) if as_json else "\n".join(paths.values()))
 
 

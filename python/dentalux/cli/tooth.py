@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import typer
 
-from dentalux import teeth
 from dentalux.output_paths import check_out_dir, rebase, staged_dir
 from dentalux.outputs import dumps_strict
 
@@ -16,6 +15,8 @@ tooth_app = typer.Typer(
 
 def _run(kind: str, out: str, resolution: float, as_json: bool,
          overwrite: bool = False) -> None:
+    from dentalux import teeth  # scipy's interpolation: imported when a tooth is built
+
     out = check_out_dir(out, "--out", overwrite=overwrite)
     build = {"incisor": teeth.incisor, "molar": teeth.molar}[kind]
     tooth = build(resolution=resolution)
