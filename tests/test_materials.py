@@ -23,7 +23,7 @@ def test_library_has_the_required_entries_and_documented_defaults():
     for name in REQUIRED:
         assert name in names
     assert M.get("enamel").name == "enamel@fitted-yu2009"
-    assert M.get("dentin").name == "dentin@fitted-yu2009"
+    assert M.get("dentin").name == "dentin@fitted-wee2023"
     assert M.get("enamel", variant="fried1995-transcribed") is M.get("enamel@fried1995-transcribed")
     assert M.variants("enamel") == ["enamel@fitted-yu2009", "enamel@fried1995-transcribed",
                                     "enamel@zijp1995", "enamel@zoller2018-kienle"]
@@ -36,9 +36,18 @@ def test_fitted_tissues_keep_the_rest_of_their_source():
         for q in ("g", "fd", "n", "wavelength_nm"):
             np.testing.assert_array_equal(getattr(fit, q), getattr(src, q))
         assert fit.value_provenance("mus").startswith("fitted")
-    # the absorption is fitted too: enamel's to thick enamel's colour, dentin's as a factor
+    # the absorption is fitted too: enamel's to thick enamel's colour; the earlier dentin's
+    # as a factor on the transcription, the default dentin's as a power law for the tooth's
+    # colour, on the same scattering
     assert M.get("enamel").value_provenance("mua").startswith("fitted")
-    np.testing.assert_allclose(M.get("dentin").mua, 0.07 * M.get("dentin@zoller2018-kienle").mua)
+    old = M.get("dentin@fitted-yu2009")
+    np.testing.assert_allclose(old.mua, 0.07 * M.get("dentin@zoller2018-kienle").mua)
+    dentin = M.get("dentin")
+    assert dentin.value_provenance("mua").startswith("fitted")
+    for q in ("mus", "g", "fd", "n", "wavelength_nm"):
+        np.testing.assert_array_equal(getattr(dentin, q), getattr(old, q))
+    # yellow: it absorbs blue far more than red
+    assert dentin.at(450.0).mua > 10 * dentin.at(650.0).mua
 
 
 def test_transcribed_values_match_the_reference_table():

@@ -12,9 +12,11 @@ natural_teeth.csv):
 Each tissue keeps g, n and the μs spectral shape of its Kienle-group variant (Zoller et al.
 2018, transcribed). Enamel gets a factor on μs (for TP) and a power-law μa(λ) = μa(700 nm)
 (λ/700)^-p (for L* and b* at infinite thickness), fitted alternately; a* is not fitted and is
-the check. Dentin gets a factor on its transcribed μa, chosen on a coarse grid so that 0.9 mm
-of the fitted enamel over 6 mm of dentin, read by the ``45-0`` preset over black, lies nearest
-the centre of the natural-tooth range (L*, natural_teeth.py), and then a factor on μs for TP.
+the check. Dentin keeps the μs of ``dentin@fitted-yu2009`` (a factor on the transcription,
+for TP) and gets a power-law μa(λ) fitted so that the procedural incisor's labial middle
+third along the view (0.9 mm fitted enamel, 2.9 mm dentin, 0.6 mm enamel), read by the
+``45-0`` preset over black, lies nearest Wee et al.'s mean natural-tooth colour, each of L*,
+a*, b* weighted by its published sd (natural_teeth.csv); its TP is then checked.
 
     python python/dentalux/data/fit_tissues.py   # prints the fitted numbers
 """
@@ -30,8 +32,12 @@ INSTRUMENT = "contact-probe-3mm"
 PHOTONS = 20_000
 TP_TARGET = {"enamel": 18.7, "dentin": 16.4}
 ENAMEL_INFINITE_LB = (73.5, 11.9)  # Wee et al. 2023, mid-incisal enamel at infinite thickness
-DENTIN_MUA_GRID = (0.3, 0.15, 0.07)
 SOURCE = {"enamel": "enamel@zoller2018-kienle", "dentin": "dentin@zoller2018-kienle"}
+# the incisor's labial middle third along the view (dentalux.design.render.NATURAL_STACK)
+MIDDLE_THIRD_MM = (0.9, 2.9, 0.6)
+# Wee et al. 2023, natural teeth: mean and sd of L*, a*, b* (natural_teeth.csv)
+TOOTH_MEAN, TOOTH_SD = (73.5, 2.2, 11.9), (7.6, 1.8, 8.4)
+COLOUR_BANDS = list(range(400, 701, 20))
 
 
 class Variant:
@@ -100,6 +106,29 @@ def fit_enamel_absorption(base, factor: float, x0=(math.log(0.02), 3.0)) -> tupl
     return math.exp(x[0]), float(x[1])
 
 
+def middle_third_lab(enamel, dentin) -> np.ndarray:
+    """CIELAB of the middle-third stack over black (45-0, both backings 0), Monte Carlo."""
+    e, d, lingual = MIDDLE_THIRD_MM
+    m = dental.read([(enamel, e), (dentin, d), (enamel, lingual)], instrument="45-0",
+                    backing_black=0.0, backing_white=0.0, photons=10_000, bands=COLOUR_BANDS)
+    return np.asarray(m.lab_black)
+
+
+def fit_dentin_absorption(enamel, dentin, x0=(math.log(0.006), 5.0)) -> tuple[float, float]:
+    """μa(700 nm) and p of dentin's power law nearest the natural-tooth mean, L*, a*, b*
+    each over its sd (common random numbers: every evaluation has seed 1)."""
+    from scipy.optimize import least_squares
+
+    mean, sd = np.array(TOOTH_MEAN), np.array(TOOTH_SD)
+
+    def residual(x):
+        lab = middle_third_lab(enamel, Variant(dentin, 1.0, power_mua(math.exp(x[0]), x[1])))
+        return (lab - mean) / sd
+
+    x = least_squares(residual, x0=list(x0), diff_step=1e-2, max_nfev=25).x
+    return math.exp(x[0]), float(x[1])
+
+
 if __name__ == "__main__":
     enamel = materials.get(SOURCE["enamel"])
     factor, mua = 20.0, None
@@ -112,19 +141,11 @@ if __name__ == "__main__":
     print(f"enamel: mus x {factor:.3f}; mua(700) {mua700:.5f}, p {p:.3f} -> mua(400) "
           f"{power_mua(mua700, p)(400.0):.5f}; TP {tp(fitted)[0]:.2f} +- {tp(fitted)[1]:.2f};"
           f" infinite Lab {np.round(infinite_lab(fitted), 2)}")
-    from dentalux import natural_teeth
-
-    dentin = materials.get(SOURCE["dentin"])
-    centre = float(np.mean(natural_teeth.reference_range("mid-incisal")["L"]))
-    best = None
-    for ka in DENTIN_MUA_GRID:
-        mua = (lambda k: lambda lam: float(dentin.at(lam).mua) * k)(ka)
-        factor = fit_factor(dentin, TP_TARGET["dentin"], mua, hi=20.0, steps=7)
-        tooth = dental.read([(fitted, 0.9), (Variant(dentin, factor, mua), 6.0)],
-                            instrument="45-0", photons=10_000, bands=list(range(380, 781, 20)))
-        value, se = tp(Variant(dentin, factor, mua))
-        print(f"dentin mua x {ka}: mus x {factor:.3f}, TP {value:.2f} +- {se:.2f}; enamel over "
-              f"dentin reads {np.round(tooth.lab_black, 1)} (range centre L* {centre:.1f})")
-        if best is None or abs(tooth.lab_black[0] - centre) < best[0]:
-            best = (abs(tooth.lab_black[0] - centre), ka, factor)
-    print(f"dentin: mua x {best[1]}, mus x {best[2]:.3f}")
+    # dentin: the μs of dentin@fitted-yu2009 (2.09 x the transcription, for TP), μa fitted
+    dentin = materials.get("dentin@fitted-yu2009")
+    mua700, p = fit_dentin_absorption(fitted, dentin)
+    fitted_dentin = Variant(dentin, 1.0, power_mua(mua700, p))
+    value, se = tp(fitted_dentin)
+    print(f"dentin: mua(700) {mua700:.5f}, p {p:.3f} -> mua(400) {power_mua(mua700, p)(400.0):.4f};"
+          f" TP {value:.2f} +- {se:.2f}; middle third reads "
+          f"{np.round(middle_third_lab(fitted, fitted_dentin), 2)}")
