@@ -6,7 +6,7 @@
 //! runs' standard errors.
 
 use dentalux_core::control::Control;
-use dentalux_core::geometry::shapes::{BoxShape, Quad, Sphere};
+use dentalux_core::geometry::shapes::BoxShape;
 use dentalux_core::geometry::Vec3;
 use dentalux_core::integrators::render::render_band;
 use dentalux_core::integrators::settings::{Integrator, Settings, VolumeEstimator};
@@ -15,7 +15,7 @@ use dentalux_core::scene::{Boundary, Geometry, Scene};
 use dentalux_core::surface::Surface;
 
 mod common;
-use common::{air, camera, disc_scene, medium, shape};
+use common::{air, camera, disc_scene, medium, nested_spheres, shape};
 
 fn band(scene: &Scene, s: &Settings) -> Vec<f64> {
     let (img, _) = render_band(scene, s, &Control::new()).unwrap();
@@ -117,47 +117,7 @@ fn beam_estimate_agrees_with_volpath_nee_on_disc() {
 /// Nested spheres (enamel around dentin, both refracting), against `volpath-nee`.
 #[test]
 fn beam_estimate_agrees_with_volpath_nee_on_nested_spheres() {
-    let sphere = |radius: f64, inside: u32, outside: u32| {
-        shape(
-            Geometry::Sphere(Sphere {
-                center: Vec3::new(0.0, 0.0, 4.0),
-                radius,
-            }),
-            Boundary::Dielectric { inside, outside },
-        )
-    };
-    let floor = shape(
-        Geometry::Quad(Quad {
-            corner: Vec3::new(-10.0, -10.0, 0.0),
-            u: Vec3::new(20.0, 0.0, 0.0),
-            v: Vec3::new(0.0, 20.0, 0.0),
-        }),
-        Boundary::Opaque { surface: 0 },
-    );
-    let light = Light::Quad {
-        corner: Vec3::new(-8.0, 8.0, 18.0),
-        u: Vec3::new(16.0, 0.0, 0.0),
-        v: Vec3::new(0.0, -16.0, 0.0),
-        radiance: 1.0,
-    };
-    let scene = Scene::new(
-        camera(
-            Vec3::new(0.0, -14.0, 12.0),
-            Vec3::new(0.0, 0.0, 3.0),
-            20,
-            15,
-        ),
-        vec![
-            air(),
-            medium(0.1, 1.5, 0.3, 1.5),
-            medium(0.4, 4.0, 0.7, 1.4),
-        ],
-        vec![Surface::Lambertian { reflectance: 0.5 }],
-        vec![sphere(4.0, 1, 0), sphere(2.5, 2, 1), floor],
-        vec![light],
-        0,
-    )
-    .unwrap();
+    let scene = nested_spheres();
     let (r, _, r_se) = reference(&scene, 256, 41);
     let (img, _, se) = runs(&scene, &beam(Integrator::VpmFull, 400_000, 0.15, 8, 43), 4);
     let (e, s) = compare("vpm-full beam nested", (mean(&img), se), (mean(&r), r_se));

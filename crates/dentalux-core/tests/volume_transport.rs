@@ -28,7 +28,7 @@ use rayon::prelude::*;
 use std::f64::consts::PI;
 
 mod common;
-use common::{air, camera, disc_scene, disc_scene_height, medium, shape};
+use common::{air, camera, disc_scene, disc_scene_height, medium, nested_spheres, shape};
 
 /// Per-pixel means and variances of the mean over `spp` jittered samples.
 fn render<F: Fn(&Ray, &mut Stream) -> f64 + Sync>(
@@ -530,58 +530,7 @@ fn vpm_paper_mode_bias_is_bounded_behind_refraction() {
 /// against `volpath`.
 #[test]
 fn vpm_full_nested_spheres_agree_with_volpath() {
-    let outer = shape(
-        Geometry::Sphere(Sphere {
-            center: Vec3::new(0.0, 0.0, 4.0),
-            radius: 4.0,
-        }),
-        Boundary::Dielectric {
-            inside: 1,
-            outside: 0,
-        },
-    );
-    let inner = shape(
-        Geometry::Sphere(Sphere {
-            center: Vec3::new(0.0, 0.0, 4.0),
-            radius: 2.5,
-        }),
-        Boundary::Dielectric {
-            inside: 2,
-            outside: 1,
-        },
-    );
-    let floor = shape(
-        Geometry::Quad(Quad {
-            corner: Vec3::new(-10.0, -10.0, 0.0),
-            u: Vec3::new(20.0, 0.0, 0.0),
-            v: Vec3::new(0.0, 20.0, 0.0),
-        }),
-        Boundary::Opaque { surface: 0 },
-    );
-    let light = Light::Quad {
-        corner: Vec3::new(-8.0, 8.0, 18.0),
-        u: Vec3::new(16.0, 0.0, 0.0),
-        v: Vec3::new(0.0, -16.0, 0.0),
-        radiance: 1.0,
-    };
-    let scene = Scene::new(
-        camera(
-            Vec3::new(0.0, -14.0, 12.0),
-            Vec3::new(0.0, 0.0, 3.0),
-            20,
-            15,
-        ),
-        vec![
-            air(),
-            medium(0.1, 1.5, 0.3, 1.5),
-            medium(0.4, 4.0, 0.7, 1.4),
-        ],
-        vec![Surface::Lambertian { reflectance: 0.5 }],
-        vec![outer, inner, floor],
-        vec![light],
-        0,
-    )
-    .unwrap();
+    let scene = nested_spheres();
     let (reference, var) = render(&scene, 1024, 41, |r, rng| volpath::radiance(&scene, r, rng));
     let img = vpm_image(&scene, 400_000, StoreMode::All, 16, 43);
     let (e, se) = compare("vpm-full nested", &img, &reference, &var);

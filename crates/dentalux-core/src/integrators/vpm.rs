@@ -148,14 +148,7 @@ pub(crate) fn default_radius(map: &PhotonMap, k: usize, flat: bool) -> f64 {
     if map.is_empty() {
         return 1.0;
     }
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for p in map.photons() {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p.pos[a]);
-            hi[a] = hi[a].max(p.pos[a]);
-        }
-    }
+    let (lo, hi) = map.bounds();
     let mut e: Vec<f64> = (0..3).map(|a| (hi[a] - lo[a]) as f64).collect();
     e.sort_by(|a, b| b.total_cmp(a));
     let n = map.len() as f64;

@@ -172,14 +172,7 @@ fn hits_box(
 impl BeamMap {
     /// Discs of radius `radius` [mm] for the photons of `map`.
     pub fn build(map: &PhotonMap, radius: f64) -> Self {
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
-        for p in map.photons() {
-            for a in 0..3 {
-                lo[a] = lo[a].min(p.pos[a]);
-                hi[a] = hi[a].max(p.pos[a]);
-            }
-        }
+        let (lo, hi) = map.bounds();
         Self { radius, lo, hi }
     }
 

@@ -229,6 +229,18 @@ impl PhotonMap {
     pub fn bytes(&self) -> usize {
         self.photons.capacity() * PHOTON_BYTES
     }
+    /// Bounding box of the photons' positions (inverted, +∞ to −∞, when empty).
+    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        for p in &self.photons {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p.pos[a]);
+                hi[a] = hi[a].max(p.pos[a]);
+            }
+        }
+        (lo, hi)
+    }
     /// Total stored power Σ ΔΦ_p.
     pub fn total_power(&self) -> f64 {
         self.photons.iter().map(|p| p.power as f64).sum()

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use dentalux_core::camera::Camera;
-use dentalux_core::geometry::shapes::{Cylinder, Quad};
+use dentalux_core::geometry::shapes::{Cylinder, Quad, Sphere};
 use dentalux_core::geometry::Vec3;
 use dentalux_core::lights::Light;
 use dentalux_core::medium::Medium;
@@ -77,6 +77,63 @@ pub fn disc_scene_height(n: f64, w: usize, h: usize, height: f64) -> Scene {
             mapping: Mapping::Xy,
         }],
         vec![ribbon, disc],
+        vec![light],
+        0,
+    )
+    .unwrap()
+}
+
+/// A sphere of one medium (n 1.5) around a sphere of another (n 1.4): enamel around dentin,
+/// on a grey floor under an area light.
+pub fn nested_spheres() -> Scene {
+    let outer = shape(
+        Geometry::Sphere(Sphere {
+            center: Vec3::new(0.0, 0.0, 4.0),
+            radius: 4.0,
+        }),
+        Boundary::Dielectric {
+            inside: 1,
+            outside: 0,
+        },
+    );
+    let inner = shape(
+        Geometry::Sphere(Sphere {
+            center: Vec3::new(0.0, 0.0, 4.0),
+            radius: 2.5,
+        }),
+        Boundary::Dielectric {
+            inside: 2,
+            outside: 1,
+        },
+    );
+    let floor = shape(
+        Geometry::Quad(Quad {
+            corner: Vec3::new(-10.0, -10.0, 0.0),
+            u: Vec3::new(20.0, 0.0, 0.0),
+            v: Vec3::new(0.0, 20.0, 0.0),
+        }),
+        Boundary::Opaque { surface: 0 },
+    );
+    let light = Light::Quad {
+        corner: Vec3::new(-8.0, 8.0, 18.0),
+        u: Vec3::new(16.0, 0.0, 0.0),
+        v: Vec3::new(0.0, -16.0, 0.0),
+        radiance: 1.0,
+    };
+    Scene::new(
+        camera(
+            Vec3::new(0.0, -14.0, 12.0),
+            Vec3::new(0.0, 0.0, 3.0),
+            20,
+            15,
+        ),
+        vec![
+            air(),
+            medium(0.1, 1.5, 0.3, 1.5),
+            medium(0.4, 4.0, 0.7, 1.4),
+        ],
+        vec![Surface::Lambertian { reflectance: 0.5 }],
+        vec![outer, inner, floor],
         vec![light],
         0,
     )
