@@ -64,8 +64,13 @@ fn pass_estimator<'a>(scene: &'a Scene, settings: &Settings, maps: &'a PhotonMap
     Vpm::new(scene, maps, params)
 }
 
+/// Pass 1's radius r_1 as a fraction of the `vpm` default radius, when `settings.radius`
+/// is not given (the points' kernels; the beam's discs start at the `vpm` default itself).
+const FIRST_RADIUS_FRACTION: f64 = 0.5;
+
 /// Pass 1's radii r_1 [mm]: per medium and for the surface map. `settings.radius` when
-/// given, else half the `vpm` default (k photons at the mean density of pass 1's maps).
+/// given, else [`FIRST_RADIUS_FRACTION`] of the `vpm` default (k photons at the mean density
+/// of pass 1's maps).
 fn first_radii(
     scene: &Scene,
     settings: &Settings,
@@ -74,12 +79,17 @@ fn first_radii(
 ) -> (Vec<f64>, f64) {
     let vol = (0..scene.media.len())
         .map(|i| {
-            settings
-                .radius
-                .unwrap_or(0.5 * default_volume_radius(scene, &maps.volume[i], settings.k))
+            settings.radius.unwrap_or(
+                FIRST_RADIUS_FRACTION * default_volume_radius(scene, &maps.volume[i], settings.k),
+            )
         })
         .collect();
-    (vol, settings.radius.unwrap_or(0.5 * vpm.surface_radius))
+    (
+        vol,
+        settings
+            .radius
+            .unwrap_or(FIRST_RADIUS_FRACTION * vpm.surface_radius),
+    )
 }
 
 /// Render a band with probabilistic progressive photon mapping: passes
@@ -136,23 +146,20 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
             radius_ratio(pass, settings.alpha, 3),
             radius_ratio(pass, settings.alpha, 2),
         );
+        // the beam's discs blur only across the ray: they shrink like a 2-D kernel, from the
+        // radius `bre` uses (settings.radius, else the vpm default itself)
+        let vol_scale = match (beam, settings.radius) {
+            (false, _) => fv,
+            (true, Some(_)) => fs,
+            (true, None) => fs / FIRST_RADIUS_FRACTION,
+        };
         for (m, r) in vpm.media.iter_mut().zip(vol_r1.iter()) {
-            m.radius = r * fv;
+            m.radius = r * vol_scale;
         }
         vpm.surface_radius = surf_r1 * fs;
         vpm.fixed_radius = true;
         if beam {
-            // the discs blur only across the ray: they shrink like a 2-D kernel, from the
-            // radius `bre` uses (settings.radius, else the vpm default: twice pass 1's r_1)
             let t_beams = Instant::now();
-            let scale = if settings.radius.is_some() {
-                fs
-            } else {
-                2.0 * fs
-            };
-            for (m, r) in vpm.media.iter_mut().zip(vol_r1.iter()) {
-                m.radius = r * scale;
-            }
             vpm.build_beams();
             stats.seconds_build += t_beams.elapsed().as_secs_f64();
         }

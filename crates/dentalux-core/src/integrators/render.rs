@@ -33,9 +33,9 @@ pub fn render_band(
     if settings.estimator() == VolumeEstimator::Beam && !scene.media.iter().any(|m| m.sigma_s > 0.0)
     {
         let what = if settings.integrator == Integrator::Bre {
-            "settings.integrator = \"bre\"".to_string()
+            "settings.integrator = \"bre\""
         } else {
-            "settings.volume_estimator = \"beam\"".to_string()
+            "settings.volume_estimator = \"beam\""
         };
         return Err(Error::InvalidInput(format!(
             "{what} estimates light scattered in media, and this scene has no scattering \

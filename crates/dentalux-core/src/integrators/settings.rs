@@ -105,6 +105,8 @@ pub enum VolumeEstimator {
 }
 
 impl VolumeEstimator {
+    /// Every estimator, in the order of [`Self::NAMES`].
+    const ALL: [VolumeEstimator; 2] = [VolumeEstimator::Points, VolumeEstimator::Beam];
     /// The contract's names, in order.
     pub const NAMES: [&'static str; 2] = ["points", "beam"];
 
@@ -113,14 +115,17 @@ impl VolumeEstimator {
         Self::NAMES[self as usize]
     }
 
-    /// Parse the contract's name.
+    /// Parse the contract's name (one of [`Self::NAMES`]).
     pub fn parse(name: &str) -> Result<Self> {
-        match name {
-            "points" => Ok(Self::Points),
-            "beam" => Ok(Self::Beam),
-            _ => Err(Error::InvalidInput(format!(
-                "settings.volume_estimator = {name:?}: allowed \"points\", \"beam\""
-            ))),
+        match Self::NAMES.iter().position(|n| *n == name) {
+            Some(i) => Ok(Self::ALL[i]),
+            None => {
+                let allowed: Vec<String> = Self::NAMES.iter().map(|n| format!("{n:?}")).collect();
+                Err(Error::InvalidInput(format!(
+                    "settings.volume_estimator = {name:?}: allowed {}",
+                    allowed.join(", ")
+                )))
+            }
         }
     }
 }
@@ -364,9 +369,14 @@ impl Settings {
         if self.volume_estimator == VolumeEstimator::Beam
             && !self.integrator.traces_volume_photons()
         {
+            let volume: Vec<&str> = (Integrator::ALL.iter())
+                .filter(|(i, _)| i.traces_volume_photons())
+                .map(|(_, n)| *n)
+                .collect();
             return Err(Error::InvalidInput(format!(
                 "settings.volume_estimator = \"beam\" applies to the volume photon integrators \
-                 (vpm, vpm-full, ppm, bre), not to settings.integrator = {:?}",
+                 ({}), not to settings.integrator = {:?}",
+                volume.join(", "),
                 self.integrator.name()
             )));
         }

@@ -138,8 +138,8 @@ pub struct Vpm<'a> {
     /// Gather every photon within the radii above instead of the k nearest (progressive
     /// photon mapping sets this and the radii of its pass).
     pub fixed_radius: bool,
-    /// Per medium, the photons' disc radii for the beam radiance estimate; `None`: eq. 11's
-    /// march ([`VpmParams::beam`], [`Vpm::build_beams`]).
+    /// Per medium, the photon map's discs for the beam radiance estimate
+    /// (`settings.volume_estimator = "beam"`, [`Vpm::build_beams`]); `None`: eq. 11's march.
     pub beams: Option<Vec<BeamMap>>,
 }
 

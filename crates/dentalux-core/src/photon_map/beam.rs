@@ -218,10 +218,9 @@ impl BeamMap {
         ]
     }
 
-    /// Call `f(photon, radius², distance² from the line, t along it)` for every photon of
-    /// `map` whose disc the line `o + t d` (unit `d`) passes through with t in `[t0, t1]`
-    /// widened by [`END_REACH`] radii.
-    fn for_each_crossing<F: FnMut(&Photon, f64, f64, f64)>(
+    /// Call `f(photon)` for every photon of `map` whose disc the line `o + t d` (unit `d`)
+    /// passes through with t in `[t0, t1]` widened by [`END_REACH`] radii.
+    fn for_each_crossing<F: FnMut(&Photon)>(
         &self,
         map: &PhotonMap,
         o: Vec3,
@@ -237,23 +236,22 @@ impl BeamMap {
         let of = [o.x, o.y, o.z];
         let df = [d.x, d.y, d.z];
         let inv = [1.0 / d.x, 1.0 / d.y, 1.0 / d.z];
+        let (r2, g) = (self.radius * self.radius, self.radius as f32);
+        let (lo_t, hi_t) = (t0 - END_REACH * self.radius, t1 + END_REACH * self.radius);
         let visit = |i: usize, f: &mut F| {
             let p = &ph[i];
-            let r = self.radius;
             let x = [
                 p.pos[0] as f64 - of[0],
                 p.pos[1] as f64 - of[1],
                 p.pos[2] as f64 - of[2],
             ];
             let t = x[0] * df[0] + x[1] * df[1] + x[2] * df[2];
-            let reach = END_REACH * r;
-            if t < t0 - reach || t > t1 + reach {
+            if t < lo_t || t > hi_t {
                 return;
             }
-            let d2 = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2] - t * t).max(0.0);
-            let r2 = r * r;
-            if d2 < r2 {
-                f(p, r2, d2, t);
+            // squared distance from the line
+            if (x[0] * x[0] + x[1] * x[1] + x[2] * x[2] - t * t) < r2 {
+                f(p);
             }
         };
         // explicit stack of (lo, hi, cell box); the tree is balanced, depth < 64
@@ -267,9 +265,7 @@ impl BeamMap {
                 continue;
             }
             let mid = (lo + hi) / 2;
-            let g = self.radius as f32;
-            let reach = END_REACH * self.radius;
-            if !hits_box(&of, &inv, &blo, &bhi, g, t0 - reach, t1 + reach) {
+            if !hits_box(&of, &inv, &blo, &bhi, g, lo_t, hi_t) {
                 continue;
             }
             visit(mid, &mut f);
@@ -287,9 +283,10 @@ impl BeamMap {
         }
     }
 
-    /// The beam radiance estimate along `seg` over `map` (this map's radii): the radiance
-    /// that multiply scattered light in the segment sends back along the ray, attenuated to
-    /// its start, each photon's disc lying in the nearer face's plane (module doc).
+    /// The beam radiance estimate along `seg` over `map` (discs of this map's radius): the
+    /// radiance that multiply scattered light in the segment sends back along the ray,
+    /// attenuated to its start, each photon's disc lying in the nearer face's plane (module
+    /// doc).
     pub fn estimate(&self, map: &PhotonMap, seg: &Segment) -> BeamEstimate {
         let t_cut = if seg.sigma_t > 0.0 {
             -MIN_TRANSMITTANCE.ln() / seg.sigma_t
@@ -303,8 +300,9 @@ impl BeamMap {
         let (o, d, wo) = (seg.o, seg.d, -seg.d);
         let faces = [seg.entry, seg.exit];
         let fraction = seg.clip.map(|clip| self.rim_fraction(seg, &clip, t1));
+        let r2 = self.radius * self.radius;
         let mut out = BeamEstimate::default();
-        self.for_each_crossing(map, o, d, 0.0, t1, |p, r2, _, _| {
+        self.for_each_crossing(map, o, d, 0.0, t1, |p| {
             let x = p.position();
             // the nearer face orients the disc; a ray grazing it, or no face, keeps the disc
             // facing the ray (n = d)
