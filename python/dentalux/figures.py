@@ -435,7 +435,16 @@ def fig_crown(out: Path, quality: Quality) -> dict:
 # the natural incisor's labial thirds: (height above the CEJ, labial face depth) [mm] in the
 # crown scene (tooth z up, labial +y towards the camera after the -90 deg turn about x)
 NATURAL_THIRDS = {"cervical": (1.7, -3.4), "middle": (5.0, -3.5), "incisal": (8.5, -1.9)}
-BOOTSTRAP = 200  # resamples for the standard error of a third's TP
+BOOTSTRAP = 200  # resamples of a region's pixels for a standard error
+
+
+def pixel_bootstrap_stderr(px: dict, stat, rng, n: int = BOOTSTRAP) -> float:
+    """Standard error of ``stat(means)`` from the pixel spread: each region's pixels
+    (``px``: name -> pixels x bands) resampled with replacement on its own, ``n`` times,
+    ``stat`` applied to the dictionary of the resampled mean spectra."""
+    boot = [stat({k: v[rng.integers(0, len(v), len(v))].mean(axis=0) for k, v in px.items()})
+            for _ in range(n)]
+    return float(np.std(boot, ddof=1))
 
 
 def crown_translucency(quality: Quality, half_mm: float = 0.8, seed: int = 1,
@@ -470,16 +479,12 @@ def crown_translucency(quality: Quality, half_mm: float = 0.8, seed: int = 1,
     for name, (x0, y0, x1, y1) in thirds.items():
         px = {k: c[y0:y1, x0:x1].reshape(-1, len(bands)) for k, c in cubes.items()}
         lab = {k: np.asarray(spectrum_to_Lab(v.mean(axis=0), wl)) for k, v in px.items()}
-        # bootstrap over the region's pixels (each backdrop resampled on its own): the
-        # standard error of TP from the pixel spread
-        boot = []
-        for _ in range(BOOTSTRAP):
-            pick = {k: v[rng.integers(0, len(v), len(v))].mean(axis=0) for k, v in px.items()}
-            boot.append(delta_e76(spectrum_to_Lab(pick["black"], wl),
-                                  spectrum_to_Lab(pick["white"], wl)))
+        # the standard error of TP from the pixel spread (each backdrop resampled on its own)
+        stderr = pixel_bootstrap_stderr(
+            px, lambda m: delta_e76(spectrum_to_Lab(m["black"], wl),
+                                    spectrum_to_Lab(m["white"], wl)), rng)
         out[name] = {"lab_black": lab["black"].tolist(), "lab_white": lab["white"].tolist(),
-                     "tp": float(delta_e76(lab["black"], lab["white"])),
-                     "tp_stderr": float(np.std(boot, ddof=1))}
+                     "tp": float(delta_e76(lab["black"], lab["white"])), "tp_stderr": stderr}
     return out | {"regions": thirds, "white_tile": tile}
 
 

@@ -112,10 +112,10 @@ def render_command(
     t0 = time.perf_counter()
     out = check_out_dir(out, "--out", overwrite=overwrite)
     scene = load_scene(scene_file, allow_outside_paths=allow_outside_paths)
+    res = parse_resolution(resolution)
     if match is not None:
         if not scene.description.get("regions"):
             raise ValueError(f"--match {match}: the scene has no [regions] to measure")
-        res = parse_resolution(resolution)
         if res is not None and tuple(res) != tuple(scene.resolution):
             raise ValueError(f"--match {match}: the scene's regions are in its own pixels "
                              f"({scene.resolution[0]}x{scene.resolution[1]}); drop "
@@ -130,7 +130,7 @@ def render_command(
                                    ("volume_estimator", volume_estimator))
                if v is not None}
     common = dict(integrator=integrator, spp=spp, photons=photons, bands=band_list,
-                  seed=seed, threads=threads, resolution=parse_resolution(resolution),
+                  seed=seed, threads=threads, resolution=res,
                   progress=None if not as_json else False, **options)
     progressive = any(x is not None for x in (passes, time_budget, target_rmse, cluster))
     if progressive:

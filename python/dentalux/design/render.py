@@ -50,7 +50,6 @@ MAX_TOTAL_MM = 2.0
 DRAFT = replace(F.QUALITIES["preview"], name="draft", resolution=(120, 90), photons=200_000,
                 teeth_volume_stored=8_000_000, teeth_spp=2)
 QUALITIES = {"draft": DRAFT, **F.QUALITIES}
-BOOTSTRAP = 200  # resamples of each region's pixels for the rendered ΔE00's standard error
 
 
 def get_quality(quality, field: str = "quality") -> F.Quality:
@@ -99,12 +98,12 @@ def _measure(cubes: list, regions: dict, wl, seed: int) -> dict:
     photons and 8 spp, about right at 8 M and 2 spp; docs/design.md)."""
     from dentalux.color import delta_e00, spectrum_to_Lab
 
-    def region_means(cube, pick=None):
-        out = {}
-        for k, (x0, y0, x1, y1) in regions.items():
-            px = cube[y0:y1, x0:x1].reshape(-1, len(wl))
-            out[k] = (px if pick is None else px[pick[k]]).mean(axis=0)
-        return out
+    def region_pixels(cube):
+        return {k: cube[y0:y1, x0:x1].reshape(-1, len(wl))
+                for k, (x0, y0, x1, y1) in regions.items()}
+
+    def region_means(cube):
+        return {k: px.mean(axis=0) for k, px in region_pixels(cube).items()}
 
     def de(means):
         return float(delta_e00(spectrum_to_Lab(means["crown"], wl),
@@ -114,12 +113,10 @@ def _measure(cubes: list, regions: dict, wl, seed: int) -> dict:
     mean = {k: np.mean([r[k] for r in runs], axis=0) for k in regions}
     lab = {k: np.asarray(spectrum_to_Lab(v, wl)) for k, v in mean.items()}
     size = {k: (y1 - y0) * (x1 - x0) for k, (x0, y0, x1, y1) in regions.items()}
-    rng = np.random.default_rng(seed)
-    cube = np.mean(cubes, axis=0)
-    boot = [de(region_means(cube, {k: rng.integers(0, n, n) for k, n in size.items()}))
-            for _ in range(BOOTSTRAP)]
+    boot = F.pixel_bootstrap_stderr(region_pixels(np.mean(cubes, axis=0)), de,
+                                    np.random.default_rng(seed))
     out = {"lab": {k: v.tolist() for k, v in lab.items()}, "delta_e00": de(mean),
-           "pixel_bootstrap_stderr": float(np.std(boot, ddof=1)), "pixels": size,
+           "pixel_bootstrap_stderr": boot, "pixels": size,
            "renders": len(cubes), "delta_e00_per_render": [de(r) for r in runs]}
     if len(runs) > 1:
         n = len(runs)
