@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from dentalux import _core, _guard, limits
 from dentalux.cli import main
+from dentalux.testing import bands_from_band
 
 ROOT = Path(__file__).resolve().parents[1]
 CORNELL = ROOT / "scenes" / "cornell.toml"
@@ -40,7 +41,7 @@ class FakeCore:
 @pytest.fixture
 def core(monkeypatch):
     fake = FakeCore()
-    monkeypatch.setattr(_core, "render_band", fake, raising=False)
+    monkeypatch.setattr(_core, "render_bands", bands_from_band(fake), raising=False)
     return fake
 
 

@@ -14,6 +14,7 @@ import pytest
 from dentalux import _core
 from dentalux.cli import main
 from dentalux.output_paths import TMP_PREFIX, atomic_file, check_out_dir, check_out_file
+from dentalux.testing import bands_from_band
 
 ROOT = Path(__file__).resolve().parents[1]
 CORNELL = ROOT / "scenes" / "cornell.toml"
@@ -41,7 +42,7 @@ class FakeCore:
 @pytest.fixture
 def core(monkeypatch):
     fake = FakeCore()
-    monkeypatch.setattr(_core, "render_band", fake, raising=False)
+    monkeypatch.setattr(_core, "render_bands", bands_from_band(fake), raising=False)
     return fake
 
 
@@ -293,7 +294,7 @@ def test_render_json_is_standard_json(core, capsys, tmp_path, monkeypatch):
         image, stats = real(scene_json, settings_json, progress)
         return image, dict(stats, radius_mean=float("nan"), ratio=float("inf"))
 
-    monkeypatch.setattr(_core, "render_band", with_nan, raising=False)
+    monkeypatch.setattr(_core, "render_bands", bands_from_band(with_nan), raising=False)
     code, out, _ = run(capsys, ["render", CORNELL, "--out", tmp_path / "o", *RENDER, "--json"])
     assert code == 0
     strict = {"parse_constant": lambda c: pytest.fail(f"non-standard JSON constant {c}")}
@@ -306,7 +307,8 @@ def test_render_json_is_standard_json(core, capsys, tmp_path, monkeypatch):
 
 
 def test_non_finite_film_is_refused(capsys, tmp_path, monkeypatch):
-    monkeypatch.setattr(_core, "render_band", FakeCore(value=float("inf")), raising=False)
+    monkeypatch.setattr(_core, "render_bands", bands_from_band(FakeCore(value=float("inf"))),
+                        raising=False)
     code, _, err = run(capsys, ["render", CORNELL, "--out", tmp_path / "o", *RENDER])
     assert code == 2 and "non-finite" in err and "radiance" in err
     assert list(tmp_path.iterdir()) == []

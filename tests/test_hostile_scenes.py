@@ -15,6 +15,7 @@ from dentalux import _core
 from dentalux.cli import main
 from dentalux.scene.load import load_scene, read_toml, scene_from_dict
 from dentalux.scene.schema import SceneError
+from dentalux.testing import bands_from_band
 
 ROOT = Path(__file__).resolve().parents[1]
 CORNELL = ROOT / "scenes" / "cornell.toml"
@@ -131,7 +132,7 @@ def test_render_json_lists_the_files_read(folder, capsys, monkeypatch, tmp_path)
         cam = json.loads(scene_json)["camera"]
         return np.ones((cam["height"], cam["width"]), np.float32), {}
 
-    monkeypatch.setattr(_core, "render_band", fake, raising=False)
+    monkeypatch.setattr(_core, "render_bands", bands_from_band(fake), raising=False)
     import tomli_w
 
     d = with_mesh("cube.obj")

@@ -128,3 +128,45 @@ def test_kernel_clip_reaches_the_core():
     assert all(np.isfinite(i).all() and (i >= 0).all() for i in images)
     assert not np.array_equal(images[0], images[1])
     assert images[1].mean() == pytest.approx(images[0].mean(), rel=0.05)
+
+
+def test_render_bands_equals_a_render_band_per_band():
+    """``dentalux.render`` sends every band in one ``render_bands`` call (the shapes decoded
+    and their BVH built once); each band is bit-identical to the one-band call with the
+    band's own scene JSON and key, for uncorrelated and correlated bands."""
+    import dentalux
+    from dentalux.render import build_settings
+    from dentalux.scene import scene_from_dict
+    from dentalux.scene.builtin import discs
+
+    sc = scene_from_dict(discs(resolution=(16, 12)))
+    bands = [450.0, 540.0, 620.0]
+    opts = dict(integrator="vpm", spp=2, photons=2000, volume_photons=3000, seed=5)
+    for correlated in (False, True):
+        res = dentalux.render(sc, bands=bands, correlated_bands=correlated, progress=False,
+                              **opts)
+        settings = build_settings(sc, **opts)
+        for b, wl in enumerate(bands):
+            key = 0 if correlated else int(wl)
+            image, _ = _core.render_band(sc.to_json(wl, (16, 12)),
+                                         json.dumps({**settings, "band": key}))
+            assert np.array_equal(res.radiance[..., b], image), (correlated, wl)
+        assert [s["wavelength_nm"] for s in res.stats["bands"]] == bands
+
+
+def test_render_bands_refusals():
+    one = plane_scene()
+    shared = {k: one[k] for k in ("camera", "ambient_medium", "shapes")}
+    band = {k: one[k] for k in ("media", "surfaces", "lights")}
+    settings = json.dumps(SETTINGS)
+    two = json.dumps({**shared, "bands": [band, band]})
+    with pytest.raises(ValueError, match=r"band_keys has 1 entries for 2 bands"):
+        _core.render_bands(two, settings, [540])
+    bad = copy.deepcopy(band)
+    bad["surfaces"][0]["reflectance"] = 2.0
+    with pytest.raises(ValueError, match=r"bands\[1\]"):
+        _core.render_bands(json.dumps({**shared, "bands": [band, bad]}), settings, [1, 2])
+    with pytest.raises(ValueError, match=r"bands: empty"):
+        _core.render_bands(json.dumps({**shared, "bands": []}), settings, [])
+    cube, stats = _core.render_bands(two, settings, [7, 7])
+    assert cube.shape == (2, 8, 12) and np.array_equal(cube[0], cube[1]) and len(stats) == 2

@@ -1,9 +1,9 @@
 """Scenes: loading, validation (key paths, did-you-mean), transforms, meshes, the render
 contract JSON, dentalux.render and the render/scene CLI.
 
-Until the Rust core has ``render_band``, rendering goes through ``fake_core`` (a stand-in
+Until the Rust core has ``render_bands``, rendering goes through ``fake_core`` (a stand-in
 that checks the JSON against docs/render-contract.md and returns a known image). The real
-renders at the bottom run once ``dentalux._core.render_band`` exists.
+renders at the bottom run once ``dentalux._core.render_bands`` exists.
 """
 
 from __future__ import annotations
@@ -23,11 +23,12 @@ from dentalux.scene import transform as tf
 from dentalux.scene.builtin import cornell_box, discs
 from dentalux.scene.resolve import material_library
 from dentalux.scene.schema import SETTING_KEYS
+from dentalux.testing import bands_from_band
 
 ROOT = Path(__file__).resolve().parents[1]
 CORNELL = ROOT / "scenes" / "cornell.toml"
 DISCS = ROOT / "scenes" / "discs.toml"
-HAS_CORE = hasattr(_core, "render_band")
+HAS_CORE = hasattr(_core, "render_bands")
 
 # ---------------------------------------------------------------------------------------
 # The render contract (docs/render-contract.md), checked key by key.
@@ -142,7 +143,7 @@ class FakeCore:
 @pytest.fixture
 def fake_core(monkeypatch):
     fake = FakeCore()
-    monkeypatch.setattr(_core, "render_band", fake, raising=False)
+    monkeypatch.setattr(_core, "render_bands", bands_from_band(fake), raising=False)
     return fake
 
 
@@ -653,8 +654,8 @@ def test_cli_scene_check(tmp_path, capsys):
 
 
 def test_render_without_core_is_a_clear_error(monkeypatch):
-    monkeypatch.delattr(_core, "render_band", raising=False)
-    with pytest.raises(RuntimeError, match="render_band"):
+    monkeypatch.delattr(_core, "render_bands", raising=False)
+    with pytest.raises(RuntimeError, match="render_bands"):
         dentalux.render(cornell_box(resolution=(2, 2)), bands=[540])
 
 
@@ -677,9 +678,9 @@ def test_dict_input_is_not_modified(tmp_path):
 
 
 # ---------------------------------------------------------------------------------------
-# Real renders through the Rust core (once dentalux._core.render_band exists)
+# Real renders through the Rust core (once dentalux._core.render_bands exists)
 
-needs_core = pytest.mark.skipif(not HAS_CORE, reason="dentalux._core.render_band not built")
+needs_core = pytest.mark.skipif(not HAS_CORE, reason="dentalux._core.render_bands not built")
 
 
 @needs_core

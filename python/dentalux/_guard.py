@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import functools
 
-NATIVE = ("slab_simulate", "render_band", "camera_project", "shape_contains",
+NATIVE = ("slab_simulate", "render_band", "render_bands", "camera_project", "shape_contains",
           "phase_sample_cos", "phase_eval", "panic_in_worker")
 
 

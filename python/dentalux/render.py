@@ -1,9 +1,10 @@
 """``dentalux.render``: render a scene band by band with the Rust core.
 
-Python loops over the wavelength bands; each band is one call of
-``dentalux._core.render_band(scene_json, settings_json, progress)`` (docs/render-contract.md)
-that returns a float32 (height, width) radiance image and a stats dict. The bands are stacked
-into ``RenderResult.radiance`` of shape (height, width, bands).
+All bands go to the core in one call,
+``dentalux._core.render_bands(scene_json, settings_json, band_keys, progress)``
+(docs/render-contract.md): the shapes are sent, decoded and put in a BVH once, and each band
+brings its own media, surfaces and lights. It returns a float32 (bands, height, width)
+radiance cube and a stats dict per band; ``RenderResult.radiance`` is (height, width, bands).
 
 Randomness: the core derives every stream from (seed, band, batch/tile). ``band`` in the
 settings is the wavelength rounded to the nearest nm, so a band renders the same whichever
@@ -66,12 +67,12 @@ def check_finite(image: np.ndarray, wavelength_nm: float) -> None:
             "intensity and the transforms' scale")
 
 
-def core_render_band():
-    """The native ``render_band``, or a clear error while the core lacks it."""
-    fn = getattr(_core, "render_band", None)
+def core_render_bands():
+    """The native ``render_bands``, or a clear error while the core lacks it."""
+    fn = getattr(_core, "render_bands", None)
     if fn is None:
         raise RuntimeError(
-            "dentalux._core.render_band is not in this build; rebuild with `make build-prod`"
+            "dentalux._core.render_bands is not in this build; rebuild with `make build-prod`"
         )
     return fn
 
@@ -154,36 +155,35 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     settings = build_settings(sc, integrator=integrator, spp=spp, photons=photons, seed=seed,
                               threads=threads, **options)
     res = _resolution(resolution) or sc.resolution
-    render_band = core_render_band()
+    render_bands = core_render_bands()
     w, h = res
     limits.check_render(settings, w, h, len(band_list))
-    # The core's progress(done) counts photons traced plus pixels finished (render.rs).
-    work = max(1, photons_traced(settings) * settings["passes"] + w * h)
-    images, per_band, seconds = [], [], []
+    # The core's progress(done) counts photons traced plus pixels finished, summed over the
+    # bands (render.rs).
+    work = max(1, photons_traced(settings) * settings["passes"] + w * h) * len(band_list)
+    ticks = len(band_list) * TICKS
     t_load = time.perf_counter() - t0
-    with bar(len(band_list) * TICKS, f"render {len(band_list)} band(s)", progress) as cb:
-        for b, wl in enumerate(band_list):
-            scene_json = sc.to_json(wl, res)
-            band_settings = {**settings, "band": 0 if correlated_bands else int(round(wl))}
+    keys = [0 if correlated_bands else int(round(wl)) for wl in band_list]
+    with bar(ticks, f"render {len(band_list)} band(s)", progress) as cb:
 
-            def tick(done: int, b: int = b) -> None:
-                if cb is not None:
-                    cb(b * TICKS + min(TICKS, int(TICKS * done / work)))
+        def tick(done: int) -> None:
+            cb(min(ticks, int(ticks * done / work)))
 
-            start = time.perf_counter()
-            image, stats = render_band(scene_json, json.dumps(band_settings),
-                                       tick if cb is not None else None)
-            seconds.append(time.perf_counter() - start)
-            image = np.asarray(image, dtype=np.float32)
-            check_finite(image, wl)
-            if image.shape != (h, w):
-                raise RuntimeError(f"render_band returned an image of shape {image.shape}, "
-                                   f"expected {(h, w)}")
-            images.append(image)
-            per_band.append({"wavelength_nm": wl, **dict(stats)})
-            if cb is not None:
-                cb((b + 1) * TICKS)
-    radiance = np.stack(images, axis=-1).astype(np.float32, copy=False)
+        cube, per_band = render_bands(sc.bands_json(band_list, res),
+                                      json.dumps({**settings, "band": 0}), keys,
+                                      tick if cb is not None else None)
+        if cb is not None:
+            cb(ticks)
+    cube = np.asarray(cube, dtype=np.float32)
+    if cube.shape != (len(band_list), h, w):
+        raise RuntimeError(f"render_bands returned a cube of shape {cube.shape}, "
+                           f"expected {(len(band_list), h, w)}")
+    for image, wl in zip(cube, band_list, strict=True):
+        check_finite(image, wl)
+    per_band = [{"wavelength_nm": wl, **dict(st)}
+                for wl, st in zip(band_list, per_band, strict=True)]
+    seconds = [st["seconds_total"] for st in per_band]
+    radiance = np.ascontiguousarray(np.moveaxis(cube, 0, -1))
     stats = {
         "integrator": settings["integrator"],
         "resolution": [w, h],

@@ -25,3 +25,24 @@ def synthetic_task(task: Task) -> tuple[np.ndarray, dict]:
 def z_scores(a: np.ndarray, b: np.ndarray, se_a: np.ndarray, se_b: np.ndarray) -> np.ndarray:
     """Per-element z of the difference of two independent estimates."""
     return (a - b) / np.sqrt(np.maximum(se_a**2 + se_b**2, 1e-300))
+
+
+def bands_from_band(render_band):
+    """A ``_core.render_bands`` stand-in built from a ``render_band``-style fake: the
+    multi-band scene is split into one contract scene per band, whose settings carry the
+    band's key, and the fake's images are stacked into a (bands, height, width) cube; each
+    band's stats get the ``seconds_total`` the core reports."""
+
+    def render_bands(scene_json, settings_json, band_keys, progress=None):
+        scene, settings = json.loads(scene_json), json.loads(settings_json)
+        shared = {k: v for k, v in scene.items() if k != "bands"}
+        images, stats = [], []
+        for band, key in zip(scene["bands"], band_keys, strict=True):
+            start = time.perf_counter()
+            image, st = render_band(json.dumps({**shared, **band}),
+                                    json.dumps({**settings, "band": key}), progress)
+            images.append(np.asarray(image, dtype=np.float32))
+            stats.append({"seconds_total": time.perf_counter() - start, **st})
+        return np.stack(images), stats
+
+    return render_bands

@@ -15,6 +15,7 @@ use crate::geometry::{Aabb, Hit, Ray, Vec3};
 use crate::lights::Light;
 use crate::medium::Medium;
 use crate::surface::Surface;
+use std::sync::Arc;
 
 /// What a closed shape separates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -276,6 +277,16 @@ enum Prim {
     },
 }
 
+/// The band-independent part of a scene: the shapes, their BVH and its primitives. Shared
+/// (behind an `Arc`) by every band's [`Scene`], so a multi-band render builds it once.
+#[derive(Debug)]
+struct Built {
+    shapes: Vec<ShapeInstance>,
+    /// BVH primitives in slot order (a leaf's primitives are contiguous).
+    prims: Vec<Prim>,
+    bvh: Bvh,
+}
+
 /// Everything a band's render needs.
 #[derive(Debug, Clone)]
 pub struct Scene {
@@ -285,17 +296,13 @@ pub struct Scene {
     pub media: Vec<Medium>,
     /// Surface materials.
     pub surfaces: Vec<Surface>,
-    /// Shapes.
-    pub shapes: Vec<ShapeInstance>,
     /// Lights.
     pub lights: Vec<Light>,
     /// Index into `media` of the medium the camera is in.
     pub ambient_medium: u32,
     /// Ray offset [mm] (see the module docs).
     pub eps: f64,
-    /// BVH primitives in slot order (a leaf's primitives are contiguous).
-    prims: Vec<Prim>,
-    bvh: Bvh,
+    built: Arc<Built>,
     light_cdf: Vec<f64>,
 }
 
@@ -309,64 +316,7 @@ impl Scene {
         lights: Vec<Light>,
         ambient_medium: u32,
     ) -> Result<Self> {
-        if media.is_empty() {
-            return Err(Error::InvalidInput(
-                "media is empty: at least the ambient medium (air) is needed".into(),
-            ));
-        }
-        if ambient_medium as usize >= media.len() {
-            return Err(Error::InvalidInput(format!(
-                "ambient_medium = {ambient_medium} is out of range: allowed [0, {}]",
-                media.len() - 1
-            )));
-        }
-        for (i, s) in surfaces.iter().enumerate() {
-            s.validate(&format!("surfaces[{i}]"))?;
-        }
-        for (i, s) in shapes.iter().enumerate() {
-            match s.boundary {
-                Boundary::Opaque { surface } => {
-                    if surface as usize >= surfaces.len() {
-                        return Err(Error::InvalidInput(format!(
-                            "shapes[{i}].boundary.surface = {surface} is out of range: {} surfaces defined",
-                            surfaces.len()
-                        )));
-                    }
-                }
-                Boundary::Dielectric { inside, outside } => {
-                    for (k, m) in [("inside", inside), ("outside", outside)] {
-                        if m as usize >= media.len() {
-                            return Err(Error::InvalidInput(format!(
-                                "shapes[{i}].boundary.{k} = {m} is out of range: {} media defined",
-                                media.len()
-                            )));
-                        }
-                    }
-                }
-            }
-        }
-        if lights.is_empty() {
-            return Err(Error::InvalidInput(
-                "lights is empty: a scene needs at least one light".into(),
-            ));
-        }
-        for (i, l) in lights.iter().enumerate() {
-            l.validate(&format!("lights[{i}]"))?;
-        }
-        let total: f64 = lights.iter().map(|l| l.power()).sum();
-        if !(total > 0.0 && total.is_finite()) {
-            return Err(Error::InvalidInput(format!(
-                "lights: total power is {total}; at least one light must emit (radiance or intensity > 0)"
-            )));
-        }
-        let mut acc = 0.0;
-        let light_cdf = lights
-            .iter()
-            .map(|l| {
-                acc += l.power() / total;
-                acc
-            })
-            .collect();
+        let light_cdf = check_band(&media, &surfaces, &shapes, &lights, ambient_medium)?;
         for (i, s) in shapes.iter().enumerate() {
             if matches!(s.boundary, Boundary::Opaque { .. }) && s.contains(camera.position) {
                 return Err(Error::InvalidInput(format!(
@@ -399,44 +349,70 @@ impl Scene {
                 }
             })
             .collect();
-        let b = bvh.bounds();
-        let extent = if b.is_empty() {
-            0.0
-        } else {
-            b.min.abs().max(b.max.abs()).max_element()
-        };
-        let extent = lights
-            .iter()
-            .fold(extent.max(camera.position.abs().max_element()), |e, l| {
-                e.max(light_anchor(l).abs().max_element())
-            });
+        let built = Arc::new(Built { shapes, prims, bvh });
         Ok(Self {
+            eps: ray_offset(&built.bvh, &camera, &lights),
             camera,
             media,
             surfaces,
-            shapes,
             lights,
             ambient_medium,
-            eps: 1e-7 * (extent + 1.0),
-            prims,
-            bvh,
+            built,
             light_cdf,
         })
+    }
+
+    /// The same shapes, BVH and camera with another band's media, surfaces and lights,
+    /// validated as in [`Scene::new`] (lights are not in the BVH, so they may differ freely).
+    pub fn with_band(
+        &self,
+        media: Vec<Medium>,
+        surfaces: Vec<Surface>,
+        lights: Vec<Light>,
+    ) -> Result<Self> {
+        let light_cdf = check_band(
+            &media,
+            &surfaces,
+            self.shapes(),
+            &lights,
+            self.ambient_medium,
+        )?;
+        Ok(Self {
+            eps: ray_offset(&self.built.bvh, &self.camera, &lights),
+            camera: self.camera,
+            media,
+            surfaces,
+            lights,
+            ambient_medium: self.ambient_medium,
+            built: Arc::clone(&self.built),
+            light_cdf,
+        })
+    }
+
+    /// Whether `other` shares this scene's shapes and BVH (built once for both).
+    pub fn shares_geometry(&self, other: &Scene) -> bool {
+        Arc::ptr_eq(&self.built, &other.built)
+    }
+
+    /// The shapes.
+    #[inline]
+    pub fn shapes(&self) -> &[ShapeInstance] {
+        &self.built.shapes
     }
 
     /// Nearest surface hit with t in (0, t_max).
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
         let mut best: Option<Hit> = None;
-        self.bvh.nearest(ray, t_max, |slot, tm| {
-            let h = match self.prims[slot as usize] {
+        self.built.bvh.nearest(ray, t_max, |slot, tm| {
+            let h = match self.built.prims[slot as usize] {
                 Prim::Triangle {
                     corners: [a, b, c],
                     shape,
                     index,
                 } => {
                     let (t, b1, b2) = intersect_corners(a, b, c, ray.o, ray.d, tm)?;
-                    let uv = match &self.shapes[shape as usize].geometry {
+                    let uv = match &self.built.shapes[shape as usize].geometry {
                         Geometry::Mesh(m) => m.uv_at(index as usize, b1, b2),
                         _ => [b1, b2],
                     };
@@ -449,7 +425,8 @@ impl Scene {
                     }
                 }
                 Prim::Shape { shape } => {
-                    let mut h = self.shapes[shape as usize].intersect_primitive(0, ray, tm)?;
+                    let mut h =
+                        self.built.shapes[shape as usize].intersect_primitive(0, ray, tm)?;
                     h.shape = shape;
                     h
                 }
@@ -463,33 +440,34 @@ impl Scene {
     /// Whether any surface lies on the ray with t in (0, t_max).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
-        self.bvh
-            .any(ray, t_max, |slot, tm| match self.prims[slot as usize] {
+        self.built.bvh.any(ray, t_max, |slot, tm| {
+            match self.built.prims[slot as usize] {
                 Prim::Triangle {
                     corners: [a, b, c], ..
                 } => intersect_corners(a, b, c, ray.o, ray.d, tm).is_some(),
-                Prim::Shape { shape } => self.shapes[shape as usize]
+                Prim::Shape { shape } => self.built.shapes[shape as usize]
                     .intersect_primitive(0, ray, tm)
                     .is_some(),
-            })
+            }
+        })
     }
 
     /// Boundary of shape `shape`.
     #[inline]
     pub fn boundary(&self, shape: u32) -> Boundary {
-        self.shapes[shape as usize].boundary
+        self.built.shapes[shape as usize].boundary
     }
 
     /// World bounds of all shapes [mm] (lower, upper corner).
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        let b = self.bvh.bounds();
+        let b = self.built.bvh.bounds();
         (b.min, b.max)
     }
 
     /// Reflectance ρ of an opaque hit (0 for a dielectric boundary).
     #[inline]
     pub fn reflectance(&self, hit: &Hit) -> f64 {
-        let s = &self.shapes[hit.shape as usize];
+        let s = &self.built.shapes[hit.shape as usize];
         match s.boundary {
             Boundary::Opaque { surface } => {
                 self.surfaces[surface as usize].reflectance(hit, s.uv_scale)
@@ -528,8 +506,94 @@ impl Scene {
 
     /// Number of primitives in the BVH.
     pub fn primitive_count(&self) -> usize {
-        self.prims.len()
+        self.built.prims.len()
     }
+}
+
+/// Validate one band's media, surfaces and lights against the shapes; returns the lights'
+/// power CDF.
+fn check_band(
+    media: &[Medium],
+    surfaces: &[Surface],
+    shapes: &[ShapeInstance],
+    lights: &[Light],
+    ambient_medium: u32,
+) -> Result<Vec<f64>> {
+    if media.is_empty() {
+        return Err(Error::InvalidInput(
+            "media is empty: at least the ambient medium (air) is needed".into(),
+        ));
+    }
+    if ambient_medium as usize >= media.len() {
+        return Err(Error::InvalidInput(format!(
+            "ambient_medium = {ambient_medium} is out of range: allowed [0, {}]",
+            media.len() - 1
+        )));
+    }
+    for (i, s) in surfaces.iter().enumerate() {
+        s.validate(&format!("surfaces[{i}]"))?;
+    }
+    for (i, s) in shapes.iter().enumerate() {
+        match s.boundary {
+            Boundary::Opaque { surface } => {
+                if surface as usize >= surfaces.len() {
+                    return Err(Error::InvalidInput(format!(
+                            "shapes[{i}].boundary.surface = {surface} is out of range: {} surfaces defined",
+                            surfaces.len()
+                        )));
+                }
+            }
+            Boundary::Dielectric { inside, outside } => {
+                for (k, m) in [("inside", inside), ("outside", outside)] {
+                    if m as usize >= media.len() {
+                        return Err(Error::InvalidInput(format!(
+                            "shapes[{i}].boundary.{k} = {m} is out of range: {} media defined",
+                            media.len()
+                        )));
+                    }
+                }
+            }
+        }
+    }
+    if lights.is_empty() {
+        return Err(Error::InvalidInput(
+            "lights is empty: a scene needs at least one light".into(),
+        ));
+    }
+    for (i, l) in lights.iter().enumerate() {
+        l.validate(&format!("lights[{i}]"))?;
+    }
+    let total: f64 = lights.iter().map(|l| l.power()).sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return Err(Error::InvalidInput(format!(
+                "lights: total power is {total}; at least one light must emit (radiance or intensity > 0)"
+            )));
+    }
+    let mut acc = 0.0;
+    let light_cdf: Vec<f64> = lights
+        .iter()
+        .map(|l| {
+            acc += l.power() / total;
+            acc
+        })
+        .collect();
+    Ok(light_cdf)
+}
+
+/// The ray offset [`Scene::eps`] for a scene with this BVH, camera and lights.
+fn ray_offset(bvh: &Bvh, camera: &Camera, lights: &[Light]) -> f64 {
+    let b = bvh.bounds();
+    let extent = if b.is_empty() {
+        0.0
+    } else {
+        b.min.abs().max(b.max.abs()).max_element()
+    };
+    let extent = lights
+        .iter()
+        .fold(extent.max(camera.position.abs().max_element()), |e, l| {
+            e.max(light_anchor(l).abs().max_element())
+        });
+    1e-7 * (extent + 1.0)
 }
 
 /// A point of a light (for the scene extent).

@@ -30,6 +30,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(slab::phase_eval, m)?)?;
     m.add_function(wrap_pyfunction!(physics::fresnel_reflectance, m)?)?;
     m.add_function(wrap_pyfunction!(render::render_band, m)?)?;
+    m.add_function(wrap_pyfunction!(render::render_bands, m)?)?;
     m.add_function(wrap_pyfunction!(render::camera_project, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::shape_contains, m)?)?;
     m.add_function(wrap_pyfunction!(render::settings_schema, m)?)?;

@@ -1,18 +1,23 @@
-//! Binding of `render_band`, `camera_project`, `settings_schema` and `photons_traced`: the JSON strings of the render contract
+//! Binding of `render_band`, `render_bands`, `camera_project`, `settings_schema` and `photons_traced`: the JSON strings of the render contract
 //! (docs/render-contract.md) go to the core's decoder ([`dentalux_core::contract`]), the band
 //! is rendered off the GIL through [`runner::run`], and the image and statistics come back as
 //! numpy and a dict.
 
 use crate::runner;
 use dentalux_core::contract::settings_schema as core_settings_schema;
-use dentalux_core::contract::{camera_from_json, scene_from_json, settings_from_json};
+use dentalux_core::contract::{
+    band_scenes_from_json, camera_from_json, scene_from_json, settings_from_json,
+};
 use dentalux_core::geometry::Vec3;
-use dentalux_core::integrators::render::render_band as core_render;
+use dentalux_core::integrators::render::{
+    render_band as core_render, render_bands as core_render_bands,
+};
 use dentalux_core::integrators::settings::Stats;
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use pyo3::types::PyList;
 
 fn stats_dict<'py>(py: Python<'py>, s: &Stats) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -70,6 +75,38 @@ pub fn render_band<'py>(
         .reshape([h, w])
         .map_err(|e| PyValueError::new_err(format!("image shape: {e}")))?;
     Ok((arr.into_any(), stats_dict(py, &stats)?))
+}
+
+/// Render every band of a multi-band scene (docs/render-contract.md: the shapes once, each
+/// band's media, surfaces and lights in `bands`), band `b` with random-stream key
+/// `band_keys[b]`: the shapes and their BVH are decoded and built once. Returns the radiance
+/// (numpy float32, bands × height × width) and a list of per-band statistics dicts.
+#[pyfunction]
+#[pyo3(signature = (scene_json, settings_json, band_keys, progress=None))]
+pub fn render_bands<'py>(
+    py: Python<'py>,
+    scene_json: &str,
+    settings_json: &str,
+    band_keys: Vec<u64>,
+    progress: Option<PyObject>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyList>)> {
+    let (settings, threads) = settings_from_json(settings_json).map_err(runner::to_py_err)?;
+    let scenes = band_scenes_from_json(scene_json).map_err(runner::to_py_err)?;
+    let (w, h) = (scenes[0].camera.width, scenes[0].camera.height);
+    let bands = runner::run(py, threads, progress, |c| {
+        core_render_bands(&scenes, &settings, &band_keys, c)
+    })?;
+    let n = bands.len();
+    let mut pixels = Vec::with_capacity(n * w * h);
+    let stats = PyList::empty(py);
+    for (image, s) in &bands {
+        pixels.extend_from_slice(image);
+        stats.append(stats_dict(py, s)?)?;
+    }
+    let arr = PyArray1::from_vec(py, pixels)
+        .reshape([n, h, w])
+        .map_err(|e| PyValueError::new_err(format!("image shape: {e}")))?;
+    Ok((arr.into_any(), stats))
 }
 
 /// The settings' schema as JSON (integrator names, keys with defaults and ranges, the pass

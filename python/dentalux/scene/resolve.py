@@ -566,12 +566,25 @@ class Scene:
         """The render-contract scene dict for one band [nm] (plain lists, JSON-ready)."""
         return {**self._band(wavelength_nm, resolution), "shapes": self._plain_shapes()}
 
-    def to_json(self, wavelength_nm: float, resolution: tuple[int, int] | None = None) -> str:
-        """:meth:`resolve` as the JSON string ``render_band`` takes. The shapes (band
-        independent, and large for meshes) are serialised once and reused for every band."""
+    def _shapes_text(self) -> str:
+        """The shapes as JSON (band independent, and large for meshes): serialised once."""
         if self._shapes_json is None:
             # json.dumps(self._shapes)'s bytes, from the texts the inside tests serialised
             texts = [self._shape_text(i) for i in range(len(self._shapes))]
             self._shapes_json = "[" + ",".join(texts) + "]"
+        return self._shapes_json
+
+    def to_json(self, wavelength_nm: float, resolution: tuple[int, int] | None = None) -> str:
+        """:meth:`resolve` as the JSON string ``render_band`` takes."""
         head = json.dumps(self._band(wavelength_nm, resolution), separators=(",", ":"))
-        return head[:-1] + ',"shapes":' + self._shapes_json + "}"
+        return head[:-1] + ',"shapes":' + self._shapes_text() + "}"
+
+    def bands_json(self, bands, resolution: tuple[int, int] | None = None) -> str:
+        """The multi-band scene JSON ``render_bands`` takes (docs/render-contract.md): the
+        camera, ambient medium and shapes once, and each band's media, surfaces and lights
+        in ``bands``, so the core decodes the shapes and builds their BVH once."""
+        parts = [self._band(wl, resolution) for wl in bands]
+        head = {k: parts[0][k] for k in ("camera", "ambient_medium")}
+        head["bands"] = [{k: p[k] for k in ("media", "surfaces", "lights")} for p in parts]
+        text = json.dumps(head, separators=(",", ":"))
+        return text[:-1] + ',"shapes":' + self._shapes_text() + "}"

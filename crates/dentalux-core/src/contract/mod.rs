@@ -280,45 +280,138 @@ fn light(mut o: Obj) -> R<Light> {
     Ok(l)
 }
 
-/// Read the resolved scene JSON of the render contract.
-pub fn scene_from_json(text: &str) -> R<Scene> {
-    let root: Value = serde_json::from_str(text)
-        .map_err(|e| Error::InvalidInput(format!("scene JSON is malformed: {e}")))?;
-    let mut o = Node { v: &root, path: "" }.obj()?;
-    let cam = {
-        let (v, p) = o.req("camera")?;
-        camera(Node { v, path: &p }.obj()?)?
-    };
-    let media = list_of(&mut o, "media")?
+/// The `media` list of `o` (air alone when absent or empty).
+fn media_of(o: &mut Obj) -> R<Vec<Medium>> {
+    let media = list_of(o, "media")?
         .into_iter()
         .map(|(v, p)| medium(Node { v, path: &p }.obj()?))
         .collect::<R<Vec<_>>>()?;
-    let media = if media.is_empty() {
-        vec![Medium::new("", 0.0, 0.0, 1.0, PhaseFunction::Isotropic)?]
+    if media.is_empty() {
+        Ok(vec![Medium::new(
+            "",
+            0.0,
+            0.0,
+            1.0,
+            PhaseFunction::Isotropic,
+        )?])
     } else {
-        media
-    };
-    let ambient = o.uint_or("ambient_medium", 0)?;
-    if ambient as usize >= media.len() {
-        return bad(format!(
-            "ambient_medium = {ambient} is out of range: {} media defined",
-            media.len()
-        ));
+        Ok(media)
     }
-    let surfaces = list_of(&mut o, "surfaces")?
+}
+
+/// The `surfaces` list of `o`.
+fn surfaces_of(o: &mut Obj) -> R<Vec<Surface>> {
+    list_of(o, "surfaces")?
         .into_iter()
         .map(|(v, p)| surface(Node { v, path: &p }.obj()?))
-        .collect::<R<Vec<_>>>()?;
-    let shapes = list_of(&mut o, "shapes")?
+        .collect()
+}
+
+/// The `shapes` list of `o`, their boundaries checked against the counts of media and
+/// surfaces.
+fn shapes_of(o: &mut Obj, n_surfaces: usize, n_media: usize) -> R<Vec<ShapeInstance>> {
+    list_of(o, "shapes")?
         .into_iter()
-        .map(|(v, p)| shape(Node { v, path: &p }.obj()?, surfaces.len(), media.len()))
-        .collect::<R<Vec<_>>>()?;
-    let lights = list_of(&mut o, "lights")?
+        .map(|(v, p)| shape(Node { v, path: &p }.obj()?, n_surfaces, n_media))
+        .collect()
+}
+
+/// The `lights` list of `o`.
+fn lights_of(o: &mut Obj) -> R<Vec<Light>> {
+    list_of(o, "lights")?
         .into_iter()
         .map(|(v, p)| light(Node { v, path: &p }.obj()?))
-        .collect::<R<Vec<_>>>()?;
+        .collect()
+}
+
+/// `ambient_medium` of `o`, checked against the number of media.
+fn ambient_of(o: &mut Obj, n_media: usize) -> R<u32> {
+    let ambient = o.uint_or("ambient_medium", 0)?;
+    if ambient as usize >= n_media {
+        return bad(format!(
+            "ambient_medium = {ambient} is out of range: {n_media} media defined"
+        ));
+    }
+    Ok(ambient as u32)
+}
+
+fn parse_root<'a>(text: &str, root: &'a mut Value) -> R<Obj<'a>> {
+    *root = serde_json::from_str(text)
+        .map_err(|e| Error::InvalidInput(format!("scene JSON is malformed: {e}")))?;
+    Node { v: root, path: "" }.obj()
+}
+
+fn camera_of(o: &mut Obj) -> R<Camera> {
+    let (v, p) = o.req("camera")?;
+    camera(Node { v, path: &p }.obj()?)
+}
+
+/// Read the resolved scene JSON of the render contract (one band).
+pub fn scene_from_json(text: &str) -> R<Scene> {
+    let mut root = Value::Null;
+    let mut o = parse_root(text, &mut root)?;
+    let cam = camera_of(&mut o)?;
+    let media = media_of(&mut o)?;
+    let ambient = ambient_of(&mut o, media.len())?;
+    let surfaces = surfaces_of(&mut o)?;
+    let shapes = shapes_of(&mut o, surfaces.len(), media.len())?;
+    let lights = lights_of(&mut o)?;
     o.done()?;
-    Scene::new(cam, media, surfaces, shapes, lights, ambient as u32)
+    Scene::new(cam, media, surfaces, shapes, lights, ambient)
+}
+
+/// Read the multi-band scene JSON of the render contract: `camera`, `ambient_medium` and
+/// `shapes` once, and `bands`, a list of objects with each band's `media`, `surfaces` and
+/// `lights`. Returns a scene per band; they share one set of shapes and one BVH.
+pub fn band_scenes_from_json(text: &str) -> R<Vec<Scene>> {
+    let mut root = Value::Null;
+    let mut o = parse_root(text, &mut root)?;
+    let cam = camera_of(&mut o)?;
+    let bands = list_of(&mut o, "bands")?;
+    if bands.is_empty() {
+        return bad(format!(
+            "{}: empty; at least one band is needed",
+            o.key("bands")
+        ));
+    }
+    let mut parts = Vec::with_capacity(bands.len());
+    for (v, p) in &bands {
+        let mut b = Node { v, path: p }.obj()?;
+        let band = (media_of(&mut b)?, surfaces_of(&mut b)?, lights_of(&mut b)?);
+        b.done()?;
+        if let Some((m0, s0, _)) = parts.first() {
+            let (m0, s0): (&Vec<Medium>, &Vec<Surface>) = (m0, s0);
+            for (what, n, n0) in [
+                ("media", band.0.len(), m0.len()),
+                ("surfaces", band.1.len(), s0.len()),
+            ] {
+                if n != n0 {
+                    return bad(format!(
+                        "{p}.{what} has {n} entries and bands[0].{what} has {n0}: every band lists the same {what}"
+                    ));
+                }
+            }
+        }
+        parts.push(band);
+    }
+    let mut parts = parts.into_iter();
+    let (media, surfaces, lights) = parts.next().expect("at least one band");
+    let ambient = ambient_of(&mut o, media.len())?;
+    let shapes = shapes_of(&mut o, surfaces.len(), media.len())?;
+    o.done()?;
+    let first = Scene::new(cam, media, surfaces, shapes, lights, ambient)?;
+    let mut scenes = Vec::with_capacity(bands.len());
+    for (i, (media, surfaces, lights)) in parts.enumerate() {
+        let scene = first
+            .with_band(media, surfaces, lights)
+            .map_err(|e| match e {
+                Error::InvalidInput(m) => Error::InvalidInput(format!("bands[{}]: {m}", i + 1)),
+                other => other,
+            })?;
+        scenes.push(scene);
+    }
+    scenes.insert(0, first);
+    Ok(scenes)
 }
 
 /// Read the settings JSON; returns the settings and the thread count (None: all cores).

@@ -46,7 +46,7 @@ fn a_valid_scene_decodes() {
     let scene = scene_from_json(&sphere_scene().to_string()).unwrap();
     assert_eq!((scene.camera.width, scene.camera.height), (12, 8));
     assert_eq!(
-        (scene.media.len(), scene.shapes.len(), scene.lights.len()),
+        (scene.media.len(), scene.shapes().len(), scene.lights.len()),
         (2, 2, 1)
     );
 }
@@ -345,4 +345,75 @@ fn a_lone_shape_is_refused_with_its_key_path() {
     );
     let got = err(r#"{"type": "torus", "boundary": {"kind": "opaque", "surface": 0}}"#);
     assert!(got.starts_with("shape.type: \"torus\": allowed"), "{got}");
+}
+
+/// `sphere_scene` in the multi-band form: the same shapes, one band per `mua` of the glass.
+fn band_scene(muas: &[f64]) -> Value {
+    let one = sphere_scene();
+    let bands: Vec<Value> = muas
+        .iter()
+        .map(|&mua| {
+            let mut media = one["media"].clone();
+            media[1]["mua"] = json!(mua);
+            json!({"media": media, "surfaces": one["surfaces"], "lights": one["lights"]})
+        })
+        .collect();
+    json!({"camera": one["camera"], "shapes": one["shapes"], "bands": bands})
+}
+
+fn band_scene_error(scene: &Value) -> String {
+    match band_scenes_from_json(&scene.to_string()) {
+        Ok(_) => panic!("decoded: {scene}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn band_scenes_share_their_geometry() {
+    let scenes = band_scenes_from_json(&band_scene(&[0.01, 0.02, 0.5]).to_string()).unwrap();
+    assert_eq!(scenes.len(), 3);
+    assert!(scenes.iter().all(|s| s.shares_geometry(&scenes[0])));
+    assert_eq!(
+        scenes.iter().map(|s| s.media[1].sigma_a).collect::<Vec<_>>(),
+        [0.01, 0.02, 0.5]
+    );
+    let single = scene_from_json(&sphere_scene().to_string()).unwrap();
+    assert!(!single.shares_geometry(&scenes[0]));
+    assert_eq!(single.eps, scenes[2].eps);
+    assert_eq!(single.primitive_count(), scenes[2].primitive_count());
+}
+
+#[test]
+fn bad_band_scenes_name_the_band() {
+    let cases: Vec<(Edit, &str)> = vec![
+        (|s| s["bands"] = json!([]), "bands: empty; at least one band is needed"),
+        (
+            |s| s["bands"][1]["media"][1]["mua"] = json!(-1.0),
+            "bands[1].media[1]",
+        ),
+        (
+            |s| {
+                s["bands"][2]["media"].as_array_mut().unwrap().pop();
+            },
+            "bands[2].media has 1 entries and bands[0].media has 2: every band lists the same media",
+        ),
+        (
+            |s| s["bands"][1]["lights"] = json!([]),
+            "bands[1]: lights is empty",
+        ),
+        (
+            |s| s["bands"][0]["shapes"] = json!([]),
+            "bands[0].shapes: unknown key",
+        ),
+        (
+            |s| s["media"] = json!([]),
+            "media: unknown key",
+        ),
+    ];
+    for (edit, want) in cases {
+        let mut s = band_scene(&[0.01, 0.02, 0.03]);
+        edit(&mut s);
+        let got = band_scene_error(&s);
+        assert!(got.contains(want), "want {want:?} in {got:?}");
+    }
 }

@@ -67,7 +67,7 @@ impl Aim {
         }
         let scattering = |m: u32| scene.media[m as usize].sigma_s > 0.0;
         let mut spheres: Vec<Target> = Vec::new();
-        for s in &scene.shapes {
+        for s in scene.shapes() {
             let Boundary::Dielectric { inside, outside } = s.boundary else {
                 continue;
             };

@@ -14,7 +14,7 @@ use crate::scene::{Boundary, Scene};
 /// only (absorption by Beer–Lambert along each segment).
 pub fn check_clear_media(scene: &Scene, integrator: &str) -> Result<()> {
     let mut used = vec![scene.ambient_medium];
-    for s in &scene.shapes {
+    for s in scene.shapes() {
         if let Boundary::Dielectric { inside, outside } = s.boundary {
             used.push(inside);
             used.push(outside);

@@ -265,7 +265,7 @@ fn trace_batch(
                         led.stored_surface += power;
                     }
                     let rho = scene.surfaces[surface as usize]
-                        .reflectance(&hit, scene.shapes[hit.shape as usize].uv_scale);
+                        .reflectance(&hit, scene.shapes()[hit.shape as usize].uv_scale);
                     if rng.uniform() >= rho {
                         led.absorbed_surface += power;
                         break;

@@ -52,7 +52,7 @@ impl PlanarFaces {
     /// The flat faces of the scene's dielectric cylinders and boxes, per inside medium.
     pub fn of(scene: &Scene) -> Self {
         let mut per_medium = vec![Vec::new(); scene.media.len()];
-        for shape in &scene.shapes {
+        for shape in scene.shapes() {
             let Boundary::Dielectric { inside, outside } = shape.boundary else {
                 continue;
             };

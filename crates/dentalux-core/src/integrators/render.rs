@@ -55,3 +55,27 @@ pub fn render_band(
     stats.spp = settings.spp;
     Ok((image, stats))
 }
+
+/// Render several bands of one scene (`scenes[b]`, e.g. from
+/// [`band_scenes_from_json`](crate::contract::band_scenes_from_json), which share their
+/// shapes and BVH), band `b` with its random-stream key `band_keys[b]` in place of
+/// `settings.band`. Each band is the image [`render_band`] gives for that scene and key.
+pub fn render_bands(
+    scenes: &[Scene],
+    settings: &Settings,
+    band_keys: &[u64],
+    control: &Control,
+) -> Result<Vec<(Vec<f32>, Stats)>> {
+    if band_keys.len() != scenes.len() {
+        return Err(Error::InvalidInput(format!(
+            "band_keys has {} entries for {} bands: one key per band",
+            band_keys.len(),
+            scenes.len()
+        )));
+    }
+    scenes
+        .iter()
+        .zip(band_keys)
+        .map(|(scene, &band)| render_band(scene, &Settings { band, ..*settings }, control))
+        .collect()
+}

@@ -94,7 +94,7 @@ pub fn radiance_with(scene: &Scene, faces: &PlanarFaces, ray: &Ray, rng: &mut St
             match scene.boundary(hit.shape) {
                 Boundary::Opaque { surface } => {
                     let rho = scene.surfaces[surface as usize]
-                        .reflectance(&hit, scene.shapes[hit.shape as usize].uv_scale);
+                        .reflectance(&hit, scene.shapes()[hit.shape as usize].uv_scale);
                     if rho <= 0.0 {
                         break;
                     }

@@ -317,7 +317,7 @@ impl<'a> Vpm<'a> {
             match scene.boundary(hit.shape) {
                 Boundary::Opaque { surface } => {
                     let rho = scene.surfaces[surface as usize]
-                        .reflectance(&hit, scene.shapes[hit.shape as usize].uv_scale);
+                        .reflectance(&hit, scene.shapes()[hit.shape as usize].uv_scale);
                     if rho > 0.0 {
                         l += beta * rho / PI
                             * self.direct_and_map_irradiance(&ray, &hit, medium, rng, sc);
