@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dentalux.scene.resolve import Scene, d65_relative
+from dentalux.scene.resolve import Scene
 from dentalux.strict_json import dumps_strict
 
 
@@ -39,23 +39,11 @@ def write_previews(radiance: np.ndarray, bands: list[float], out: Path) -> dict[
 
 
 def colour_inputs(scene: Scene, bands: list[float]) -> tuple[np.ndarray, str, float]:
-    """What ``write_images`` needs: it expects radiance relative to an equal-energy light
-    and applies the illuminant itself. When every light has the same named spectrum (D65 or
-    flat), divide by that relative spectrum and name the illuminant (D65 or E); ``white`` is
-    the brightest light's radiance scale. Otherwise the radiance is the stimulus itself
-    (illuminant E, white 1)."""
-    lights = scene.description["lights"]
-    kinds = {lt["spectrum"] if isinstance(lt["spectrum"], str) else "table" for lt in lights}
-    if kinds == {"D65"}:
-        divisor = np.array([d65_relative(wl) for wl in bands])
-        illuminant = "D65"
-    elif kinds == {"flat"}:
-        divisor = np.ones(len(bands))
-        illuminant = "E"
-    else:
-        return np.ones(len(bands)), "E", 1.0
-    white = max(lt.get("radiance", lt.get("intensity", 1.0)) for lt in lights)
-    return divisor, illuminant, float(white)
+    """What ``write_images`` needs, :meth:`Scene.illuminant`: it expects radiance relative
+    to an equal-energy light and applies the illuminant itself, so the radiance is divided
+    by the lights' relative spectrum (the factor the scene multiplied them by) and the
+    illuminant named; ``white`` is the brightest light's radiance scale."""
+    return scene.illuminant(bands)
 
 
 def region_matcher(guide: str | None):

@@ -515,15 +515,36 @@ class Scene:
             return out
         return {"type": "black"}
 
-    def _light_at(self, i: int, wavelength_nm: float) -> dict:
+    def light_relative(self, i: int, wavelength_nm: float) -> float:
+        """Light ``i``'s relative spectrum at ``wavelength_nm``: the factor its radiance or
+        intensity is multiplied by in the band's contract scene."""
         s = self.description["lights"][i]
         path = f"lights[{i}].spectrum"
         if s["spectrum"] == "D65":
-            rel = d65_relative(wavelength_nm, path)
-        elif s["spectrum"] == "flat":
-            rel = 1.0
-        else:
-            rel = spectrum_at(s["spectrum"], wavelength_nm, path)
+            return d65_relative(wavelength_nm, path)
+        if s["spectrum"] == "flat":
+            return 1.0
+        return spectrum_at(s["spectrum"], wavelength_nm, path)
+
+    def illuminant(self, bands) -> tuple[np.ndarray, str, float]:
+        """The light the render's colour is read under: (the lights' relative spectrum at
+        ``bands``, the CIE illuminant it is, the brightest light's radiance scale) when every
+        light has the same named spectrum (D65 or flat: E); else (ones, E, 1), the radiance
+        then being the colour stimulus itself. Dividing a band's radiance by the first and
+        the third gives the radiance factor against that light, the quantity the colour
+        maths interpolates between bands (it is smooth where the light's spectrum is not)."""
+        lights = self.description["lights"]
+        kinds = {lt["spectrum"] if isinstance(lt["spectrum"], str) else "table"
+                 for lt in lights}
+        if len(kinds) != 1 or kinds == {"table"}:
+            return np.ones(len(bands)), "E", 1.0
+        rel = np.array([self.light_relative(0, wl) for wl in bands])
+        white = max(lt.get("radiance", lt.get("intensity", 1.0)) for lt in lights)
+        return rel, ("D65" if kinds == {"D65"} else "E"), float(white)
+
+    def _light_at(self, i: int, wavelength_nm: float) -> dict:
+        s = self.description["lights"][i]
+        rel = self.light_relative(i, wavelength_nm)
         kind = s["type"]
         if kind == "quad":
             return {"type": "quad", "corner": s["corner"], "u": s["u"], "v": s["v"],
