@@ -9,12 +9,12 @@ started or spawned before an input that cannot work is refused.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from numbers import Integral, Real
 
 from dentalux import _core
+from dentalux.core_schema import INTEGRATOR_INFO
 
 # The colour range [nm]: the CIE colour-matching functions are defined on 360-830 nm (D65
 # on 300-830 nm). One rule for every command (docs/limits.md): a band lies in this range
@@ -50,8 +50,7 @@ MEMORY_FRACTION = 0.8
 #: bytes one stored photon takes in a photon map (the core's record: position, power, direction)
 PHOTON_BYTES = _core.PHOTON_BYTES
 # integrators that fill volume photon maps (the core's list)
-VOLUME_INTEGRATORS = tuple(i["name"] for i in json.loads(_core.settings_schema())["integrators"]
-                           if i["traces_volume_photons"])
+VOLUME_INTEGRATORS = tuple(i["name"] for i in INTEGRATOR_INFO if i["traces_volume_photons"])
 #: bytes per pixel and band of a render (the core's film, the radiance cube, previews)
 PIXEL_BAND_BYTES = 48
 #: bytes per pixel of the colour images (XYZ, sRGB, EXR buffers in float64)

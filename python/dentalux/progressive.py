@@ -38,8 +38,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from dentalux.core_schema import SETTINGS_SCHEMA
 from dentalux.distributed import LocalExecutor, Task
-from dentalux.scene.schema import SETTINGS_SCHEMA
 
 # Last pass the core accepts (integrators/settings.rs: MAX_PASSES − 1).
 MAX_PASSES = SETTINGS_SCHEMA["max_passes"] - 1

@@ -13,14 +13,13 @@ The key reference with types, units and defaults is ``docs/scene-format.md``.
 from __future__ import annotations
 
 import difflib
-import json
 import math
 from numbers import Integral, Real
 from typing import Any
 
 import numpy as np
 
-from dentalux import _core
+from dentalux.core_schema import INTEGRATOR_INFO, SETTINGS_SCHEMA
 from dentalux.limits import BAND_RANGE_NM, check_threads
 
 
@@ -38,8 +37,7 @@ TOP_KEYS = ("scene", "render", "camera", "media", "surfaces", "shapes", "lights"
 SCENE_KEYS = {"name": "", "description": "", "units": "mm"}
 
 # The settings' keys, defaults and ranges, the integrator names and the pass bound live in
-# the core (integrators/settings.rs, contract/mod.rs); this layer reads them once.
-SETTINGS_SCHEMA = json.loads(_core.settings_schema())
+# the core (integrators/settings.rs, contract/mod.rs), read once by dentalux.core_schema.
 # every settings key of the contract, in order: {name: {"kind", "default", ranges...}}
 SETTING_KEYS = {k["name"]: k for k in SETTINGS_SCHEMA["keys"]}
 
@@ -51,10 +49,9 @@ RENDER_KEYS = {
        for name, k in SETTING_KEYS.items() if k["scene"]},
 }
 
-INTEGRATORS = tuple(i["name"] for i in SETTINGS_SCHEMA["integrators"])
+INTEGRATORS = tuple(i["name"] for i in INTEGRATOR_INFO)
 # integrators that trace no photons
-PATH_TRACERS = tuple(i["name"] for i in SETTINGS_SCHEMA["integrators"]
-                     if not i["traces_photons"])
+PATH_TRACERS = tuple(i["name"] for i in INTEGRATOR_INFO if not i["traces_photons"])
 
 CAMERA_KEYS = {
     "position": REQUIRED,
