@@ -437,6 +437,13 @@ impl Scene {
         best
     }
 
+    /// The first surface from `o` along unit `d` within `t_max` [mm]: (hit point, normal), the
+    /// face finder of a kernel clip ([`KernelClip`](crate::photon_map::KernelClip)).
+    #[inline]
+    pub fn first_face(&self, o: Vec3, d: Vec3, t_max: f64) -> Option<(Vec3, Vec3)> {
+        self.intersect(&Ray::new(o, d), t_max).map(|h| (h.p, h.n))
+    }
+
     /// Whether any surface lies on the ray with t in (0, t_max).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f64) -> bool {

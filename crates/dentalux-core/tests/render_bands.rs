@@ -27,7 +27,12 @@ fn each_band_equals_its_own_render() {
     let scenes = bands();
     assert!(scenes.iter().all(|s| s.shares_geometry(&scenes[0])));
     let keys = [540, 560, 600];
-    for integrator in [Integrator::Vpm, Integrator::VpmFull, Integrator::Ppm, Integrator::VolpathNee] {
+    for integrator in [
+        Integrator::Vpm,
+        Integrator::VpmFull,
+        Integrator::Ppm,
+        Integrator::VolpathNee,
+    ] {
         let settings = Settings {
             integrator,
             spp: 2,
@@ -61,5 +66,9 @@ fn each_band_equals_its_own_render() {
 fn one_key_per_band() {
     let scenes = bands();
     let err = render_bands(&scenes, &Settings::default(), &[540], &Control::new()).unwrap_err();
-    assert!(err.to_string().contains("band_keys has 1 entries for 3 bands"), "{err}");
+    assert!(
+        err.to_string()
+            .contains("band_keys has 1 entries for 3 bands"),
+        "{err}"
+    );
 }

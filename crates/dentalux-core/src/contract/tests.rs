@@ -374,7 +374,10 @@ fn band_scenes_share_their_geometry() {
     assert_eq!(scenes.len(), 3);
     assert!(scenes.iter().all(|s| s.shares_geometry(&scenes[0])));
     assert_eq!(
-        scenes.iter().map(|s| s.media[1].sigma_a).collect::<Vec<_>>(),
+        scenes
+            .iter()
+            .map(|s| s.media[1].sigma_a)
+            .collect::<Vec<_>>(),
         [0.01, 0.02, 0.5]
     );
     let single = scene_from_json(&sphere_scene().to_string()).unwrap();

@@ -24,9 +24,9 @@ use super::tiles::{render_tiles, Scratch};
 use super::transport::{cross, spawn};
 use crate::control::Control;
 use crate::error::Result;
-use crate::geometry::{Ray, Vec3};
+use crate::geometry::Ray;
 use crate::math::Frame;
-use crate::photon_map::{Estimate, Neighbours, PhotonMap, PHOTON_BYTES};
+use crate::photon_map::{PhotonMap, PHOTON_BYTES};
 use crate::rng::Stream;
 use crate::sampling::cosine_hemisphere;
 use crate::scene::{Boundary, Scene};
@@ -48,66 +48,6 @@ pub struct SurfacePm<'a> {
     pub final_gather: bool,
     /// Guard on the number of specular events along a camera path.
     pub max_depth: u32,
-}
-
-/// Largest distance from the tangent plane, as a fraction of the gathering radius, at which a
-/// photon still counts: the sphere is flattened into a disc so that photons on a neighbouring
-/// wall near a corner are not counted as if they had landed here (Jensen's disc filter).
-pub const DISC_THICKNESS: f64 = 0.25;
-
-/// Irradiance at `x` on the side `n` faces, from the `k` nearest photons within `r_max` [mm]:
-/// E = Σ ΔΦ_p / (π r²) over the photons that arrived from the front (d_p · n < 0) and lie
-/// within `DISC_THICKNESS · r` of the tangent plane. r is the distance of the k-th photon,
-/// which is itself left out of the sum: for photons scattered by a Poisson process of
-/// density ρ, (k − 1)/(π r_k²) is the unbiased estimate of ρ, k/(π r_k²) is k/(k − 1) too
-/// high. With fewer than k photons within `r_max`, r = `r_max` and all of them count.
-pub fn irradiance_disc_filter_knn(
-    map: &PhotonMap,
-    x: Vec3,
-    n: Vec3,
-    k: usize,
-    r_max: f64,
-    nb: &mut Neighbours,
-) -> Estimate {
-    map.knn(x, k, r_max, nb);
-    if nb.is_empty() {
-        return Estimate {
-            value: 0.0,
-            radius: r_max,
-            count: 0,
-        };
-    }
-    let full = nb.len() >= k;
-    let (r2, far) = if full {
-        let far = nb
-            .items()
-            .iter()
-            .max_by(|a, b| a.0.total_cmp(&b.0))
-            .map(|&(d2, i)| (d2, i))
-            .unwrap();
-        (far.0 as f64, Some(far.1))
-    } else {
-        (r_max * r_max, None)
-    };
-    let r = r2.sqrt();
-    let thickness = DISC_THICKNESS * r;
-    let mut sum = 0.0;
-    let mut count = 0;
-    for &(_, i) in nb.items() {
-        if Some(i) == far {
-            continue;
-        }
-        let p = &map.photons()[i as usize];
-        if p.direction().dot(n) < 0.0 && (p.position() - x).dot(n).abs() <= thickness {
-            sum += p.power as f64;
-            count += 1;
-        }
-    }
-    Estimate {
-        value: if r2 > 0.0 { sum / (PI * r2) } else { 0.0 },
-        radius: r,
-        count,
-    }
 }
 
 /// Default gathering-radius cap: a tenth of the scene's bounding-box diagonal [mm].
@@ -183,8 +123,7 @@ impl SurfacePm<'_> {
                         let d = Frame::from_axis(n_f).to_world(cosine_hemisphere(rng.uniform2()));
                         PI * self.trace(spawn(scene, &hit, d), medium, false, false, rng, scratch)
                     } else {
-                        let e = irradiance_disc_filter_knn(
-                            self.map,
+                        let e = self.map.irradiance_flattened_disc_knn(
                             hit.p,
                             n_f,
                             self.k,
@@ -250,75 +189,4 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
             ..Stats::default()
         },
     ))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::photon_map::Photon;
-
-    /// Photons scattered uniformly (a Poisson-like process) on the plane z = 0 with density
-    /// ρ: the estimate averages to ρ·ΔΦ. With k = 8, counting the k-th photon as well would be
-    /// k/(k − 1) = 14 % too high, far outside the 4 standard errors allowed here. Photons that
-    /// arrive from below (the back side) or lie off the plane (a wall) must not count.
-    #[test]
-    fn density_estimate_is_unbiased_on_a_uniform_plane() {
-        let mut rng = Stream::new(21, 0, 0);
-        let (side, n) = (100.0, 100_000);
-        let down = Vec3::new(0.3, 0.0, -1.0).normalize();
-        let mut photons: Vec<Photon> = (0..n)
-            .map(|_| {
-                Photon::new(
-                    Vec3::new(rng.uniform(), rng.uniform(), 0.0) * side,
-                    down,
-                    1.0,
-                )
-            })
-            .collect();
-        // the same number arriving at the back side, and a wall of photons at z ≥ 0.3 mm
-        for _ in 0..n {
-            let p = Vec3::new(rng.uniform(), rng.uniform(), 0.0) * side;
-            photons.push(Photon::new(p, -down, 1.0));
-            let w = Vec3::new(rng.uniform() * side, 50.0, 0.3 + rng.uniform() * 5.0);
-            photons.push(Photon::new(w, down, 1.0));
-        }
-        let map = PhotonMap::build(photons);
-        let density = n as f64 / (side * side);
-        let k = 8;
-        let mut nb = Neighbours::new();
-        // a grid of query points 1.25 mm apart (r ≈ 0.5 mm): nearly independent estimates,
-        // away from the wall at y = 50
-        let mut vals = Vec::new();
-        for i in 0..72 {
-            for j in 0..72 {
-                let y = 5.0 + j as f64 * 1.25;
-                if (y - 50.0).abs() < 2.0 {
-                    continue;
-                }
-                let x = Vec3::new(5.0 + i as f64 * 1.25, y, 0.0);
-                vals.push(irradiance_disc_filter_knn(&map, x, Vec3::Z, k, 10.0, &mut nb).value);
-            }
-        }
-        let mean_se = |vals: &[f64]| {
-            let m = vals.iter().sum::<f64>() / vals.len() as f64;
-            let var = vals.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (vals.len() - 1) as f64;
-            (m, (var / vals.len() as f64).sqrt())
-        };
-        let (m, se) = mean_se(&vals);
-        assert!((m - density).abs() < 4.0 * se, "{m} vs {density} ± {se}");
-        assert!(se < 0.02 * density);
-        // right at the foot of the wall (whose photons are 20× denser, from 0.3 mm up) the disc
-        // filter keeps them out: the estimate still averages to the floor's density
-        let foot: Vec<f64> = (0..360)
-            .map(|i| {
-                let x = Vec3::new(5.0 + i as f64 * 0.25, 50.0, 0.0);
-                irradiance_disc_filter_knn(&map, x, Vec3::Z, k, 10.0, &mut nb).value
-            })
-            .collect();
-        let (m, se) = mean_se(&foot);
-        assert!(
-            (m - density).abs() < 4.0 * se,
-            "at the wall: {m} vs {density} ± {se}"
-        );
-    }
 }

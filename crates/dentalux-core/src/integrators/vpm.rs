@@ -210,6 +210,19 @@ pub(crate) fn default_volume_radius(scene: &Scene, map: &PhotonMap, k: usize) ->
 }
 
 impl<'a> Vpm<'a> {
+    /// The kernel clip of one volume estimate when `params.clip` asks for it: `faces` finds
+    /// the faces, rotated at random (one uniform drawn only then).
+    fn kernel_clip<'c>(
+        &self,
+        faces: &'c dyn Fn(Vec3, Vec3, f64) -> Option<(Vec3, Vec3)>,
+        rng: &mut Stream,
+    ) -> Option<KernelClip<'c>> {
+        self.params.clip.then(|| KernelClip {
+            hit: faces,
+            u: rng.uniform(),
+        })
+    }
+
     /// Resolve the parameters for `scene` and `maps`.
     pub fn new(scene: &'a Scene, maps: &'a PhotonMaps, params: VpmParams) -> Self {
         let (lo, hi) = scene.bounds();
@@ -442,13 +455,8 @@ impl<'a> Vpm<'a> {
                     .min_by(|a, b| depth(a).total_cmp(&depth(b)))
                     .copied()
                     .filter(|_| self.params.layer > 0.0);
-                let hit = |o: Vec3, d: Vec3, t_max: f64| {
-                    scene.intersect(&Ray::new(o, d), t_max).map(|h| (h.p, h.n))
-                };
-                let clip = self.params.clip.then(|| KernelClip {
-                    hit: &hit,
-                    u: rng.uniform(),
-                });
+                let faces = |o, d, t_max| scene.first_face(o, d, t_max);
+                let clip = self.kernel_clip(&faces, rng);
                 let planes = near.map(|near| Planes {
                     near,
                     far: planes.iter().flatten().find(|p| **p != near).copied(),
@@ -536,13 +544,8 @@ impl<'a> Vpm<'a> {
                 return l;
             };
             let scene = self.scene;
-            let hit = |o: Vec3, d: Vec3, t_max: f64| {
-                scene.intersect(&Ray::new(o, d), t_max).map(|h| (h.p, h.n))
-            };
-            let clip = self.params.clip.then(|| KernelClip {
-                hit: &hit,
-                u: rng.uniform(),
-            });
+            let faces = |o, d, t_max| scene.first_face(o, d, t_max);
+            let clip = self.kernel_clip(&faces, rng);
             let e = b.estimate(
                 map,
                 &Segment {
@@ -614,11 +617,7 @@ impl<'a> Vpm<'a> {
             } else if self.params.clip {
                 // rays along the surface start just off it, on the lit side
                 let lift = n * scene.eps;
-                let faces = |o: Vec3, d: Vec3, t_max: f64| {
-                    scene
-                        .intersect(&Ray::new(o + lift, d), t_max)
-                        .map(|h| (h.p, h.n))
-                };
+                let faces = |o: Vec3, d, t_max| scene.first_face(o + lift, d, t_max);
                 let clip = KernelClip {
                     hit: &faces,
                     u: rng.uniform(),

@@ -1,6 +1,7 @@
 //! The radiance estimates of the paper over a photon map: eq. 11's multiple-scattering term
 //! in a medium (a sphere, or the boundary-aligned layer kernel of [`super::kernel`]) and the
-//! surface irradiance Σ ΔΦ / (π r²) (a disc, or the disc clipped by faces standing on the
+//! surface irradiance Σ ΔΦ / (π r²) (a disc, a disc flattened about the tangent plane as
+//! `pm` gathers (Jensen's disc filter), or the disc clipped by faces standing on the
 //! surface), each with the radius of the k nearest photons (`_knn`) or a fixed radius
 //! (`_at_radius`, progressive photon mapping).
 
@@ -21,6 +22,11 @@ pub struct Estimate {
     /// Photons that contributed.
     pub count: usize,
 }
+
+/// Largest distance from the tangent plane, as a fraction of the gathering radius, at which a
+/// photon still counts: the sphere is flattened into a disc so that photons on a neighbouring
+/// wall near a corner are not counted as if they had landed here (Jensen's disc filter).
+pub const DISC_THICKNESS: f64 = 0.25;
 
 /// Gathering radius of a k-nearest query and the factor that makes its estimate unbiased
 /// for a uniform density: when k photons were found the radius is the k-th distance and that
@@ -311,6 +317,61 @@ impl PhotonMap {
         }
         Estimate {
             value: unbias * sum / (PI * r * r),
+            radius: r,
+            count,
+        }
+    }
+
+    /// Irradiance at `x` on the side `n` faces, from the `k` nearest photons within `r_max` [mm]:
+    /// E = Σ ΔΦ_p / (π r²) over the photons that arrived from the front (d_p · n < 0) and lie
+    /// within `DISC_THICKNESS · r` of the tangent plane. r is the distance of the k-th photon,
+    /// which is itself left out of the sum: for photons scattered by a Poisson process of
+    /// density ρ, (k − 1)/(π r_k²) is the unbiased estimate of ρ, k/(π r_k²) is k/(k − 1) too
+    /// high. With fewer than k photons within `r_max`, r = `r_max` and all of them count.
+    pub fn irradiance_flattened_disc_knn(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        k: usize,
+        r_max: f64,
+        nb: &mut Neighbours,
+    ) -> Estimate {
+        self.knn(x, k, r_max, nb);
+        if nb.is_empty() {
+            return Estimate {
+                value: 0.0,
+                radius: r_max,
+                count: 0,
+            };
+        }
+        let full = nb.len() >= k;
+        let (r2, far) = if full {
+            let far = nb
+                .items()
+                .iter()
+                .max_by(|a, b| a.0.total_cmp(&b.0))
+                .map(|&(d2, i)| (d2, i))
+                .unwrap();
+            (far.0 as f64, Some(far.1))
+        } else {
+            (r_max * r_max, None)
+        };
+        let r = r2.sqrt();
+        let thickness = DISC_THICKNESS * r;
+        let mut sum = 0.0;
+        let mut count = 0;
+        for &(_, i) in nb.items() {
+            if Some(i) == far {
+                continue;
+            }
+            let p = &self.photons()[i as usize];
+            if p.direction().dot(n) < 0.0 && (p.position() - x).dot(n).abs() <= thickness {
+                sum += p.power as f64;
+                count += 1;
+            }
+        }
+        Estimate {
+            value: if r2 > 0.0 { sum / (PI * r2) } else { 0.0 },
             radius: r,
             count,
         }
