@@ -75,6 +75,16 @@ fn hg_cdf(g: f64, mu: f64) -> f64 {
 }
 
 impl PhaseFunction {
+    /// A medium's phase function from its parameters: multi-lobe HG (eq. 8) when `lobes`
+    /// are given, else [`PhaseFunction::hg_with_isotropic`]; validated.
+    pub fn from_params(g: f64, fd: f64, lobes: &[(f64, f64)]) -> Result<Self> {
+        if lobes.is_empty() {
+            Self::hg_with_isotropic(g, fd)
+        } else {
+            Self::multi_lobe(lobes)
+        }
+    }
+
     /// HG when `fd` is 0, HG + isotropic (eq. 10) otherwise; validated.
     pub fn hg_with_isotropic(g: f64, fd: f64) -> Result<Self> {
         check_range("g", g, -1.0, true, 1.0, true, "")?;

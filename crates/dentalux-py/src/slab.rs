@@ -19,11 +19,8 @@ pub fn phase_from(
     fd: f64,
     lobes: Option<Vec<(f64, f64)>>,
 ) -> PyResult<PhaseFunction> {
-    let p = match lobes {
-        Some(l) if !l.is_empty() => PhaseFunction::multi_lobe(&l),
-        _ => PhaseFunction::hg_with_isotropic(g, fd),
-    };
-    p.map_err(|e| PyValueError::new_err(format!("{name}{e}")))
+    PhaseFunction::from_params(g, fd, lobes.as_deref().unwrap_or_default())
+        .map_err(|e| PyValueError::new_err(format!("{name}{e}")))
 }
 
 /// One layer as Python passes it: (mua, mus, g, fd, n, thickness, lobes).
@@ -62,25 +59,8 @@ pub fn slab_simulate<'py>(
         let medium = Medium::new(&name, mua, mus, n, phase).map_err(runner::to_py_err)?;
         stack.push(SlabLayer { medium, thickness });
     }
-    let incidence = match incidence {
-        "normal" => Incidence::Normal,
-        "diffuse" => Incidence::Diffuse,
-        "angle" => Incidence::Angle(angle_deg.to_radians()),
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "incidence = {other:?}: allowed 'normal', 'diffuse' or 'angle'"
-            )))
-        }
-    };
-    let estimator = match estimator {
-        "analog" => Estimator::Analog,
-        "weighted" => Estimator::Weighted,
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "estimator = {other:?}: allowed 'analog' or 'weighted'"
-            )))
-        }
-    };
+    let incidence = Incidence::parse(incidence, angle_deg).map_err(runner::to_py_err)?;
+    let estimator = Estimator::parse(estimator).map_err(runner::to_py_err)?;
     let cfg = SlabConfig {
         layers: stack,
         n_above,

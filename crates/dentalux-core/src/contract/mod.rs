@@ -62,12 +62,8 @@ fn medium(mut o: Obj) -> R<Medium> {
                 .map(|(v, p)| Node { v, path: &p }.fixed::<2>().map(|[w, g]| (w, g)))
                 .collect::<R<Vec<_>>>()?;
             ph.done()?;
-            let f = if lobes.is_empty() {
-                PhaseFunction::hg_with_isotropic(g, fd)
-            } else {
-                PhaseFunction::multi_lobe(&lobes)
-            };
-            f.map_err(|e| Error::InvalidInput(format!("{p}.{e}")))?
+            PhaseFunction::from_params(g, fd, &lobes)
+                .map_err(|e| Error::InvalidInput(format!("{p}.{e}")))?
         }
     };
     let m = Medium::new(&prefix, o.num("mua")?, o.num("mus")?, o.num("n")?, phase)?;

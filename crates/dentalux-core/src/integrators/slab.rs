@@ -79,6 +79,21 @@ pub enum Incidence {
     Diffuse,
 }
 
+impl Incidence {
+    /// From its name (`normal`, `diffuse`, `angle`; the polar angle `angle_deg` [deg] for
+    /// `angle`), as the Python API and CLI spell it.
+    pub fn parse(name: &str, angle_deg: f64) -> Result<Self> {
+        match name {
+            "normal" => Ok(Incidence::Normal),
+            "diffuse" => Ok(Incidence::Diffuse),
+            "angle" => Ok(Incidence::Angle(angle_deg.to_radians())),
+            other => Err(Error::InvalidInput(format!(
+                "incidence = {other:?}: allowed 'normal', 'diffuse' or 'angle'"
+            ))),
+        }
+    }
+}
+
 /// Which estimator tallies the photons.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Estimator {
@@ -86,6 +101,19 @@ pub enum Estimator {
     Analog,
     /// Weight deposition with energy-exact roulette (MCML style).
     Weighted,
+}
+
+impl Estimator {
+    /// From its name (`analog`, `weighted`).
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "analog" => Ok(Estimator::Analog),
+            "weighted" => Ok(Estimator::Weighted),
+            other => Err(Error::InvalidInput(format!(
+                "estimator = {other:?}: allowed 'analog' or 'weighted'"
+            ))),
+        }
+    }
 }
 
 /// Everything one slab run needs.
