@@ -2,7 +2,7 @@
 the core one call each (the scene JSON with its shapes serialised, decoded and put in a BVH
 per band, as `dentalux.render` did) against one `render_bands` call (shapes and BVH once).
 
-Scene: the crown figure's two procedural incisors (`figures.crown_scene`, preview meshes),
+Scene: the crown figure's two procedural incisors (`scene.builtin.crown`, preview meshes),
 rendered with `vpm` at a small photon count so that the per-band fixed cost shows, and at the
 figure's own settings (--figure) to show what it is worth there. Both ways give the same
 image bits (checked here, and by tests/test_render_band.py); CPU-seconds are user + system of

@@ -25,7 +25,6 @@ import math
 import shutil
 import time
 from dataclasses import asdict, dataclass
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +32,7 @@ import numpy as np
 from dentalux import materials, natural_teeth, spectra
 from dentalux.outputs import peak_memory_bytes, write_render_outputs
 from dentalux.render import render
+from dentalux.scene import builtin
 from dentalux.scene.builtin import discs as discs_scene
 from dentalux.scene.load import scene_from_dict
 from dentalux.scene.project import square_region
@@ -206,51 +206,9 @@ def fig4(out: Path, quality: Quality, thickness_mm: float) -> dict:
         "material_provenance": scaled.provenance})
 
 
-def cornell_teeth_scene(quality: Quality, box_mm: float = 60.0) -> dict:
-    """Three procedural teeth standing in a small Cornell box (y up, open towards -z)."""
-    from dentalux.scene.builtin import GREEN, RED
-
-    s = box_mm
-    up = {"axis": [1.0, 0.0, 0.0], "angle_deg": -90.0}  # tooth +z (crown) -> +y, labial -> -z
-    root = 13.3  # the teeth's roots reach 13 mm below the CEJ (teeth/incisor.py, molar.py)
-
-    def tooth(model, x, z, turn):
-        return {"type": "tooth", "model": model, "resolution": quality.tooth_resolution_mm,
-                "enamel": "enamel", "dentin": "dentin", "outside": "air",
-                "transform": {"rotate": [up, {"axis": [0.0, 1.0, 0.0], "angle_deg": turn}],
-                              "translate": [x, root, z]}}
-
-    quad = {"type": "quad"}
-    return {
-        "scene": {"name": "cornell-teeth", "description": "Fig. 5: three teeth in a Cornell box"},
-        "camera": {"position": [s / 2, s / 2, -2.1 * s], "look_at": [s / 2, s / 2 - 2, 0.0],
-                   "up": [0.0, 1.0, 0.0], "fov_deg": 36.0,
-                   "resolution": list(quality.resolution)},
-        "media": {"enamel": {"material": "enamel"}, "dentin": {"material": "dentin"}},
-        "surfaces": {"white": {"type": "lambertian", "reflectance": 0.75},
-                     "red": {"type": "lambertian", "reflectance": RED},
-                     "green": {"type": "lambertian", "reflectance": GREEN}},
-        "shapes": [
-            {**quad, "name": "floor", "corner": [0, 0, 0], "u": [s, 0, 0], "v": [0, 0, s],
-             "surface": "white"},
-            {**quad, "name": "ceiling", "corner": [0, s, 0], "u": [s, 0, 0], "v": [0, 0, s],
-             "surface": "white"},
-            {**quad, "name": "back", "corner": [0, 0, s], "u": [s, 0, 0], "v": [0, s, 0],
-             "surface": "white"},
-            # the camera sees +x on its left (right = forward × up): red left, green right,
-            # as in the Cornell box (and the built-in cornell_box())
-            {**quad, "name": "left", "corner": [s, 0, 0], "u": [0, 0, s], "v": [0, s, 0],
-             "surface": "red"},
-            {**quad, "name": "right", "corner": [0, 0, 0], "u": [0, 0, s], "v": [0, s, 0],
-             "surface": "green"},
-            tooth("incisor", 0.27 * s, 0.45 * s, 15.0),
-            tooth("molar", 0.52 * s, 0.55 * s, -10.0),
-            tooth("incisor", 0.77 * s, 0.4 * s, -25.0),
-        ],
-        "lights": [{"type": "quad", "name": "ceiling light",
-                    "corner": [0.35 * s, 0.995 * s, 0.35 * s], "u": [0.3 * s, 0, 0],
-                    "v": [0, 0, 0.3 * s], "radiance": 12.0, "spectrum": "D65"}],
-    }
+def cornell_teeth_scene(quality: Quality) -> dict:
+    """Fig. 5's scene (:func:`dentalux.scene.builtin.cornell_teeth`) at ``quality``."""
+    return builtin.cornell_teeth(quality.resolution, quality.tooth_resolution_mm)
 
 
 def _teeth_settings(quality: Quality) -> dict:
@@ -284,102 +242,10 @@ def fig5(out: Path, quality: Quality) -> dict:
                           extra={"anisotropy_scaling": scaling}, **_teeth_settings(quality))
 
 
-def lights_45_0(centre, dist_mm: float, elevation_deg: float, size_mm: float,
-                radiance: float) -> list[dict]:
-    """Two square D65 quad lights facing ``centre`` from 45° left and right of the -z axis
-    (the camera's direction), raised by ``elevation_deg``, ``dist_mm`` away."""
-    e = math.radians(elevation_deg)
-    lights = []
-    for side in (-1.0, 1.0):
-        # unit direction from the light towards the centre
-        d = np.array([-side * math.cos(e) * math.sqrt(0.5), -math.sin(e),
-                      math.cos(e) * math.sqrt(0.5)])
-        u = np.array([1.0, 0.0, side]) / math.sqrt(2.0)  # horizontal, across d
-        v = np.cross(d, u)
-        if np.dot(np.cross(u, v), d) < 0:  # the emitting side (u × v) must face the centre
-            u = -u
-        u, v = u * size_mm, v / np.linalg.norm(v) * size_mm
-        corner = np.asarray(centre, float) - dist_mm * d - (u + v) / 2
-        lights.append({"type": "quad", "name": f"key {'left' if side < 0 else 'right'}",
-                       "corner": corner.tolist(), "u": u.tolist(), "v": v.tolist(),
-                       "radiance": radiance, "spectrum": "D65"})
-    return lights
-
-
-@lru_cache(maxsize=4)
-def _crown_surfaces(layers_mm: tuple, resolution: float) -> list:
-    from dentalux.teeth.incisor import crown_surfaces
-
-    return crown_surfaces(layers_mm, resolution)
-
-
 def crown_scene(quality: Quality, layers=None, core=None) -> tuple[dict, dict]:
-    """A natural incisor (image left) and the same tooth whose enamel volume is replaced by
-    the biomaterial: a full-coverage crown on the natural dentin (image right). Returns the
-    scene and the image regions (labial thirds of each crown) for the colour comparison.
-
-    ``layers``: the crown's shells instead, [(scene medium, labial thickness [mm])] top to
-    bottom (a designed crown, :mod:`dentalux.design.render`), on a preparation as deep as
-    their total (:func:`dentalux.teeth.incisor.crown_surfaces`) filled with ``core`` (a scene
-    medium; None: the natural tooth's dentin). None: the figure's crown."""
-    up = {"axis": [1.0, 0.0, 0.0], "angle_deg": -90.0}
-    w, h = quality.resolution
-
-    def tooth(x, enamel_medium):
-        return {"type": "tooth", "model": "incisor", "resolution": quality.tooth_resolution_mm,
-                "enamel": enamel_medium, "dentin": "dentin", "outside": "air",
-                "transform": {"rotate": [up], "translate": [x, 0.0, 0.0]}}
-
-    def layered_crown(media):
-        # nested closed meshes: shell i lies between surface i and i + 1, the core inside
-        # the last; each surface's outside is the shell above it (air for the outer one)
-        shells = [f"crown {i + 1}" for i in range(len(layers))]
-        media.update({name: dict(m) for name, (m, _) in zip(shells, layers, strict=True)})
-        if core is not None:
-            media["crown core"] = dict(core)
-        inside = shells + ["dentin" if core is None else "crown core"]
-        surfaces = _crown_surfaces(tuple(float(t) for _, t in layers),
-                                   float(quality.tooth_resolution_mm))
-        place = {"rotate": [up], "translate": [-6.5, 0.0, 0.0]}  # as tooth(-6.5, ...)
-        return [{"type": "mesh", "name": f"crown surface {i}", "positions": v,
-                 "triangles": f, "inside": inside[i],
-                 "outside": "air" if i == 0 else inside[i - 1], "transform": place}
-                for i, (v, f) in enumerate(surfaces)]
-
-    fov, eye_y, dist = 30.0, 3.0, 60.0
-    scene = {
-        "scene": {"name": "crown", "description": "biomaterial crown beside a natural incisor"},
-        "camera": {"position": [0.0, eye_y, -dist], "look_at": [0.0, eye_y, 0.0],
-                   "up": [0.0, 1.0, 0.0], "fov_deg": fov, "resolution": [w, h]},
-        "media": {"enamel": {"material": "enamel"}, "dentin": {"material": "dentin"}},
-        # a black contrastor behind the teeth, as in dental shade photography: light that
-        # passes through the enamel-only incisal edge is lost, so the edge's translucency
-        # shows (against a grey or white background it reads only as a greyer rim)
-        "surfaces": {"backdrop": {"type": "black"}},
-        "shapes": [
-            {"type": "quad", "name": "backdrop", "corner": [-60.0, -40.0, 15.0],
-             "u": [120.0, 0.0, 0.0], "v": [0.0, 80.0, 0.0], "surface": "backdrop"},
-            # +x is on the image's left (see the regions below): natural left, crown right
-            tooth(6.5, "enamel"),
-        ],
-        # 45°/0° geometry, as a dental spectrophotometer measures: two 16 mm square lights
-        # 45° left and right of the labial faces' normal, 15° above it, 50 mm away; the
-        # mirror highlights fall on the mesial and distal slopes of the curved faces, off the
-        # measured middle third (one large light above the camera put its highlight there)
-        "lights": lights_45_0([0.0, 5.0, -3.5], 50.0, 15.0, 16.0, 16.0),
-    }
-    if layers is None:
-        scene["media"]["crown"] = {"material": "biomaterial-table1"}
-        scene["shapes"].append(tooth(-6.5, "crown"))
-    else:
-        scene["shapes"] += layered_crown(scene["media"])
-    # the measured squares on the labial faces (z ≈ -3.5 mm after the rotation), placed by
-    # the render's own camera: it looks along +z with +y up, so +x (the crown) is on the
-    # image's left. (Until 2026-12-01 the squares were placed as if +x were on the right,
-    # which swapped the two labels: the "darker crown" of earlier notes was the natural tooth.)
-    cam = scene["camera"]
-    return scene, {name: square_region(cam, [x, 5.0, -3.5], 1.25)
-                   for name, x in (("natural", 6.5), ("crown", -6.5))}
+    """The crown figure's scene and regions (:func:`dentalux.scene.builtin.crown`) at
+    ``quality``."""
+    return builtin.crown(quality.resolution, quality.tooth_resolution_mm, layers, core)
 
 
 def white_tile(scene: dict, regions: dict, quality: Quality, z_mm: float = -3.5) -> dict:
@@ -455,7 +321,6 @@ def crown_translucency(quality: Quality, half_mm: float = 0.8, seed: int = 1,
     {third: {"lab_black", "lab_white", "tp", "tp_stderr"}}, the regions and the tile."""
     from dentalux.color import delta_e76, spectrum_to_Lab
     from dentalux.outputs import colour_inputs
-    from dentalux.scene.project import square_region
 
     scene, regions = crown_scene(quality)
     cam = scene["camera"]

@@ -1,6 +1,6 @@
 """A designed crown rendered beside a natural incisor (``dentalux design --render DIR``).
 
-The scene is the crown figure's (:func:`dentalux.figures.crown_scene`): a natural incisor
+The scene is the crown figure's (:func:`dentalux.scene.builtin.crown`): a natural incisor
 (enamel over dentin) and, beside it, the same tooth crowned with the design's layers as
 nested shells of the design's thicknesses (labially; lingually 2/3 of them, thinning to the
 margin at the CEJ) on a preparation as deep as the crown, filled with the substrate
