@@ -21,7 +21,7 @@ far fewer photons for a narrow detector):
   read like ``45-0``; the view must not exceed the lit spot.
 - ``0-d``: a normal beam, the whole hemisphere collected, specular included: the geometry
   of the ``infinite`` instrument, which is dentalux's laterally infinite disc on ideal
-  backings (the adding formula of :mod:`dentalux.dental`), read exactly as before.
+  backings (the adding formula of :mod:`dentalux.dental`).
 
 Presets live in ``data/instruments.toml`` with a provenance entry for every number; a
 user's own instrument is a TOML file with the same keys (docs/instruments.md).

@@ -11,15 +11,18 @@
 //! - [`geometry`]: rays, hits, shapes, triangle meshes, transforms and the BVH.
 //! - [`camera`], [`film`], [`surface`], [`lights`]: the pinhole camera, the image and its
 //!   tiles, opaque surface materials, light sources.
-//! - [`scene`]: one band's scene as plain data, with the BVH over every shape.
-//! - [`photon_map`]: photon records, the kd-tree and the density estimates (eq. 11).
+//! - [`scene`]: one band's scene as plain data, with the BVH over every shape (shared by
+//!   the bands of one render).
+//! - [`photon_map`]: photon records, the kd-tree, the density estimates (eq. 11) and the
+//!   beam radiance estimate.
 //! - [`instrument`]: a spectrophotometer's measuring geometry (lit spot, window, backing) as
 //!   the slab simulator sees it.
 //! - [`integrators`]: the slab simulator (what a spectrophotometer measures) and the
-//!   renderers (`pm`, `path`, `vpm`, `vpm-full`, `ppm`, `volpath`, `volpath-nee`), with the
-//!   render settings and the dispatch on them.
+//!   renderers (`pm`, `path`, `vpm`, `bre`, `vpm-full`, `ppm`, `volpath`, `volpath-nee`),
+//!   with the render settings and the dispatch on them, one band or all bands of a scene.
 //! - [`contract`]: the render contract's JSON (docs/render-contract.md) decoded into a
-//!   [`scene::Scene`] and [`integrators::settings::Settings`], and the settings' schema.
+//!   [`scene::Scene`] (one per band, sharing their shapes) and
+//!   [`integrators::settings::Settings`], and the settings' schema.
 //!
 //! Units: millimetres, 1/mm, nanometres. No Python in this crate.
 #![forbid(unsafe_code)]

@@ -109,7 +109,7 @@ def _spectra(material, thickness: float, instrument, kw: dict):
 
 def _geometry(out: dict) -> dict:
     """How the numbers were read, from the JSON's ``instrument`` object (none: the infinite
-    geometry, as before instruments existed)."""
+    geometry: a laterally infinite disc on ideal backings)."""
     ins = out.get("instrument")
     if not isinstance(ins, dict) or not ins or ins.get("name") == "infinite":
         text = INFINITE_NOTE + (" (instrument 'infinite')" if isinstance(ins, dict) and ins
