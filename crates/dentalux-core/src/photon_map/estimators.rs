@@ -41,6 +41,26 @@ fn knn_radius(nb: &Neighbours, k: usize, r_max: f64) -> (f64, f64) {
 }
 
 impl PhotonMap {
+    /// Σ ΔΦ and the count over the found photons that arrived at the side `n` faces
+    /// (d_p · n < 0) and that `keep` (photon index, photon) accepts, in the found order.
+    fn front_power(
+        &self,
+        nb: &Neighbours,
+        n: Vec3,
+        keep: impl Fn(u32, &Photon) -> bool,
+    ) -> (f64, usize) {
+        let mut sum = 0.0;
+        let mut count = 0;
+        for &(_, i) in nb.items() {
+            let p = &self.photons()[i as usize];
+            if p.direction().dot(n) < 0.0 && keep(i, p) {
+                sum += p.power as f64;
+                count += 1;
+            }
+        }
+        (sum, count)
+    }
+
     /// Eq. 11's multiple-scattering term at `x`: Σ p(d_p · wo) ΔΦ_p / (4/3 π r³) over the `k`
     /// nearest photons within `r_max` [mm], r being the distance of the farthest one found
     /// (or `r_max` when fewer than `k` lie within it), times (k − 1)/k when k were found (see
@@ -271,18 +291,10 @@ impl PhotonMap {
                     .map(|e| e.1)
             })
             .flatten();
-        let mut sum = 0.0;
-        let mut n_in = 0;
-        for &(_, i) in nb.items() {
-            let p = &self.photons()[i as usize];
-            if p.direction().dot(n) < 0.0
-                && Some(i) != kth
+        let (sum, n_in) = self.front_power(nb, n, |i, p| {
+            Some(i) != kth
                 && (count == 0 || inside_planes(planes, frame.to_local(p.position() - x)))
-            {
-                sum += p.power as f64;
-                n_in += 1;
-            }
-        }
+        });
         Estimate {
             value: if area > 0.0 { unbias * sum / area } else { 0.0 },
             radius: r,
@@ -306,15 +318,7 @@ impl PhotonMap {
             return Estimate::default();
         }
         let (r, unbias) = knn_radius(nb, k, r_max);
-        let mut sum = 0.0;
-        let mut count = 0;
-        for &(_, i) in nb.items() {
-            let p = &self.photons()[i as usize];
-            if p.direction().dot(n) < 0.0 {
-                sum += p.power as f64;
-                count += 1;
-            }
-        }
+        let (sum, count) = self.front_power(nb, n, |_, _| true);
         Estimate {
             value: unbias * sum / (PI * r * r),
             radius: r,
@@ -358,18 +362,9 @@ impl PhotonMap {
         };
         let r = r2.sqrt();
         let thickness = DISC_THICKNESS * r;
-        let mut sum = 0.0;
-        let mut count = 0;
-        for &(_, i) in nb.items() {
-            if Some(i) == far {
-                continue;
-            }
-            let p = &self.photons()[i as usize];
-            if p.direction().dot(n) < 0.0 && (p.position() - x).dot(n).abs() <= thickness {
-                sum += p.power as f64;
-                count += 1;
-            }
-        }
+        let (sum, count) = self.front_power(nb, n, |i, p| {
+            Some(i) != far && (p.position() - x).dot(n).abs() <= thickness
+        });
         Estimate {
             value: if r2 > 0.0 { sum / (PI * r2) } else { 0.0 },
             radius: r,
