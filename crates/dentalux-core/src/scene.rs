@@ -494,6 +494,13 @@ impl Scene {
         (i, self.light_cdf[i] - lo)
     }
 
+    /// The probability with which [`Scene::pick_light`] picks light `i`.
+    #[inline]
+    pub fn light_probability(&self, i: usize) -> f64 {
+        let lo = if i == 0 { 0.0 } else { self.light_cdf[i - 1] };
+        self.light_cdf[i] - lo
+    }
+
     /// Total power Φ of all lights.
     pub fn total_power(&self) -> f64 {
         self.lights.iter().map(|l| l.power()).sum()

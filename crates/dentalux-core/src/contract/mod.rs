@@ -447,6 +447,8 @@ pub fn settings_from_json(text: &str) -> R<(Settings, Option<usize>)> {
         final_gather: (o.opt_with("final_gather", |n| n.boolean())?).unwrap_or(d.final_gather),
         kernel_layer: o.num_or("kernel_layer", d.kernel_layer)?,
         kernel_clip: (o.opt_with("kernel_clip", |n| n.boolean())?).unwrap_or(d.kernel_clip),
+        spectral_photons: (o.opt_with("spectral_photons", |n| n.boolean())?)
+            .unwrap_or(d.spectral_photons),
         volume_estimator: match o.opt("volume_estimator") {
             Some((v, p)) => VolumeEstimator::parse(Node { v, path: &p }.string()?)?,
             None => d.volume_estimator,
@@ -497,6 +499,7 @@ pub fn settings_schema() -> String {
             "kernel_layer" => json!(d.kernel_layer),
             "kernel_clip" => json!(d.kernel_clip),
             "volume_estimator" => json!(d.volume_estimator.name()),
+            "spectral_photons" => json!(d.spectral_photons),
             _ => Value::Null,
         }
     };
@@ -527,7 +530,8 @@ pub fn settings_schema() -> String {
         .iter()
         .map(|(i, name)| {
             json!({"name": name, "traces_photons": i.traces_photons(),
-                   "traces_volume_photons": i.traces_volume_photons()})
+                   "traces_volume_photons": i.traces_volume_photons(),
+                   "shares_spectral_photons": i.shares_spectral_photons()})
         })
         .collect();
     json!({"integrators": integrators, "keys": keys, "max_passes": MAX_PASSES}).to_string()

@@ -20,6 +20,7 @@
 
 pub mod aim;
 pub mod direct;
+pub mod hero;
 pub mod path;
 pub mod photon_trace;
 pub mod planar_nee;

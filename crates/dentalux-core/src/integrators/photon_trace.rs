@@ -21,6 +21,7 @@ use crate::control::Control;
 use crate::error::{Error, Result};
 use crate::geometry::Ray;
 use crate::integrators::aim::Aim;
+use crate::integrators::hero::HeroWalk;
 use crate::integrators::transport::{cross, spawn};
 use crate::math::Frame;
 use crate::photon_map::{Photon, PhotonMap};
@@ -156,6 +157,17 @@ struct BatchOut {
     ledger: Ledger,
     /// Photons traced (fewer than asked when `stop_at` ended the batch).
     traced: u64,
+    /// Spectral passes: each stored photon's power in every band (B values per photon, in
+    /// the order of `volume[m]` and `surface`), and each band's ledger.
+    bands: Option<BandPowers>,
+}
+
+/// The per-band side of a spectral batch ([`super::hero`]).
+#[derive(Debug, Default)]
+struct BandPowers {
+    volume: Vec<Vec<f32>>,
+    surface: Vec<f32>,
+    ledgers: Vec<Ledger>,
 }
 
 impl BatchOut {
@@ -167,10 +179,12 @@ impl BatchOut {
 
 /// Trace one batch of `count` photons (aimed at the media when `aim` is given); with
 /// `stop_at`, stop after the photon whose events bring the batch's volume maps to that many.
-/// `surface_left`: how many of the batch's photons may still store on surfaces.
+/// `surface_left`: how many of the batch's photons may still store on surfaces. With more
+/// than one scene (the bands of a spectral pass, sharing their geometry), each photon walks
+/// in a hero band's scene and stores every band's power ([`super::hero`]).
 #[allow(clippy::too_many_arguments)]
 fn trace_batch(
-    scene: &Scene,
+    scenes: &[Scene],
     n_total: u64,
     count: u64,
     mode: StoreMode,
@@ -181,13 +195,21 @@ fn trace_batch(
     rng: &mut Stream,
     control: &Control,
 ) -> BatchOut {
-    let nm = scene.media.len();
+    let nb = scenes.len();
+    let spectral = nb > 1;
+    let nm = scenes[0].media.len();
     let mut out = BatchOut {
         volume: vec![Vec::new(); nm],
         surface: Vec::new(),
         ledger: Ledger::new(nm),
         traced: 0,
+        bands: spectral.then(|| BandPowers {
+            volume: vec![Vec::new(); nm],
+            surface: Vec::new(),
+            ledgers: vec![Ledger::new(nm); nb],
+        }),
     };
+    let mut hw = HeroWalk::new(nb);
     let led = &mut out.ledger;
     for _ in 0..count {
         if let Some(stop) = stop_at {
@@ -202,18 +224,31 @@ fn trace_batch(
         if control.is_cancelled() {
             break;
         }
-        let (li, p_light) = scene.pick_light(rng.uniform());
-        let light = &scene.lights[li];
-        let (mut ray, weight) = match aim {
-            Some(a) => a.sample_emission(light, rng.uniform2(), rng.uniform2(), rng.uniform()),
-            None => light.sample_emission(rng.uniform2(), rng.uniform2()),
+        let hero = if spectral {
+            ((rng.uniform() * nb as f64) as usize).min(nb - 1)
+        } else {
+            0
         };
+        let scene = &scenes[hero];
+        let (li, p_light) = scene.pick_light(rng.uniform());
+        let (u1, u2) = (rng.uniform2(), rng.uniform2());
+        let u3 = aim.map(|_| rng.uniform());
+        let emit = |s: &Scene| match aim {
+            Some(a) => a.sample_emission(&s.lights[li], u1, u2, u3.unwrap_or(0.0)),
+            None => s.lights[li].sample_emission(u1, u2),
+        };
+        let (mut ray, weight) = emit(scene);
         // Φ_l / (N · P(l)): every photon carries Φ_total / N for uniform emission
         let power = weight / (p_light * n_total as f64);
         if !(power > 0.0 && power.is_finite()) {
             continue;
         }
         led.emitted += power;
+        let bands = out.bands.as_mut();
+        if let Some(bp) = bands {
+            hw.start(scenes, li, p_light, n_total, |j| emit(&scenes[j]).1);
+            hw.book(&mut bp.ledgers, |l| &mut l.emitted);
+        }
         let mut medium = scene.ambient_medium;
         let mut scattered = false; // any scattering (volume or diffuse surface) so far
         let mut reflected = false; // any reflection at a mismatched boundary so far
@@ -223,39 +258,86 @@ fn trace_batch(
             events += 1;
             if events > MAX_EVENTS {
                 led.cut += power;
+                if let Some(bp) = out.bands.as_mut() {
+                    hw.book(&mut bp.ledgers, |l| &mut l.cut);
+                }
                 break;
             }
             let m = &scene.media[medium as usize];
+            let mi = medium as usize;
             let hit = scene.intersect(&ray, f64::INFINITY);
             let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
             let sigma_t = m.sigma_t();
+            let sigma_t_of = |j: usize| scenes[j].media[mi].sigma_t();
             if sigma_t > 0.0 {
                 // free flight, eq. 2
                 let s = sample_exponential(rng.uniform_open0(), sigma_t);
                 if s < t_hit {
                     let x = ray.at(s);
+                    if spectral {
+                        // collision density σt e^{−σt s}, relative to the hero's
+                        let ln_density = |st: f64| {
+                            if st > 0.0 {
+                                st.ln() - st * s
+                            } else {
+                                f64::NEG_INFINITY
+                            }
+                        };
+                        hw.scale_ln(ln_density(sigma_t), |j| ln_density(sigma_t_of(j)));
+                    }
                     // scatter or absorb, eqs. 3–4
                     if rng.uniform() >= m.albedo() {
-                        led.absorbed_medium[medium as usize] += power;
+                        led.absorbed_medium[mi] += power;
+                        if let Some(bp) = out.bands.as_mut() {
+                            let absorb = |j: usize| 1.0 - scenes[j].media[mi].albedo();
+                            hw.book_with(&mut bp.ledgers, 1.0 - m.albedo(), absorb, |l| {
+                                &mut l.absorbed_medium[mi]
+                            });
+                        }
                         break;
+                    }
+                    if spectral {
+                        hw.scale(m.albedo(), |j| scenes[j].media[mi].albedo());
                     }
                     // only scattering events are stored: their density is σs φ, what eq. 11's
                     // Σ p ΔΦ / V estimates (storing absorptions too would give σt φ, 1/albedo
                     // too bright)
                     let single_traced = !scattered && !reflected;
                     if targets.volume && (mode == StoreMode::All || !single_traced) {
-                        out.volume[medium as usize].push(Photon::new(x, ray.d, power));
-                        led.stored_volume[medium as usize] += power;
+                        out.volume[mi].push(Photon::new(x, ray.d, power));
+                        led.stored_volume[mi] += power;
+                        if let Some(bp) = out.bands.as_mut() {
+                            bp.volume[mi].extend(hw.powers().iter().map(|&p| p as f32));
+                            hw.book(&mut bp.ledgers, |l| &mut l.stored_volume[mi]);
+                        }
                     }
                     // new direction from the phase function, eqs. 7–10
                     let d = m.phase.sample(ray.d, rng.uniform2(), rng.uniform());
+                    if spectral {
+                        let cos = ray.d.dot(d);
+                        let phase_of = |j: usize| &scenes[j].media[mi].phase;
+                        if (0..nb).any(|j| *phase_of(j) != m.phase) {
+                            hw.scale(m.phase.eval(cos), |j| phase_of(j).eval(cos));
+                        }
+                    }
                     ray = Ray { o: x, d };
                     scattered = true;
                     continue;
                 }
             }
+            if spectral {
+                // no collision before the boundary: e^{−σt t}, relative to the hero's
+                if t_hit.is_finite() {
+                    hw.scale_ln(-sigma_t * t_hit, |j| -sigma_t_of(j) * t_hit);
+                } else {
+                    hw.forbid(|j| sigma_t_of(j) > 0.0);
+                }
+            }
             let Some(hit) = hit else {
                 led.escaped += power;
+                if let Some(bp) = out.bands.as_mut() {
+                    hw.book(&mut bp.ledgers, |l| &mut l.escaped);
+                }
                 break;
             };
             match scene.boundary(hit.shape) {
@@ -263,12 +345,29 @@ fn trace_batch(
                     if on_surfaces && (scattered || specular) {
                         out.surface.push(Photon::new(hit.p, ray.d, power));
                         led.stored_surface += power;
+                        if let Some(bp) = out.bands.as_mut() {
+                            bp.surface.extend(hw.powers().iter().map(|&p| p as f32));
+                            hw.book(&mut bp.ledgers, |l| &mut l.stored_surface);
+                        }
                     }
-                    let rho = scene.surfaces[surface as usize]
-                        .reflectance(&hit, scene.shapes()[hit.shape as usize].uv_scale);
+                    let uv_scale = scene.shapes()[hit.shape as usize].uv_scale;
+                    let si = surface as usize;
+                    let rho = scene.surfaces[si].reflectance(&hit, uv_scale);
+                    let rho_of = |j: usize| scenes[j].surfaces[si].reflectance(&hit, uv_scale);
                     if rng.uniform() >= rho {
                         led.absorbed_surface += power;
+                        if let Some(bp) = out.bands.as_mut() {
+                            hw.book_with(
+                                &mut bp.ledgers,
+                                1.0 - rho,
+                                |j| 1.0 - rho_of(j),
+                                |l| &mut l.absorbed_surface,
+                            );
+                        }
                         break;
+                    }
+                    if spectral {
+                        hw.scale(rho, rho_of);
                     }
                     // Lambertian bounce on the side the photon came from
                     let n = if ray.d.dot(hit.n) < 0.0 {
@@ -287,6 +386,26 @@ fn trace_batch(
                     } else {
                         c.refracted
                     };
+                    if spectral {
+                        // bands of another index: their own Fresnel choice, and a refraction
+                        // that bends elsewhere (a delta direction) is one they cannot draw
+                        let other = |j: usize| cross(&scenes[j], &hit, ray.d, inside, outside);
+                        let differs = |j: usize| {
+                            let mj = &scenes[j].media;
+                            mj[c.from as usize].eta != c.eta_i || mj[c.to as usize].eta != c.eta_t
+                        };
+                        if (0..nb).any(differs) {
+                            match refracted {
+                                None => hw.scale(c.reflectance, |j| other(j).reflectance),
+                                Some(_) => {
+                                    hw.forbid(|j| differs(j) && other(j).refracted != c.refracted)
+                                }
+                            }
+                            if refracted.is_some() {
+                                hw.scale(1.0 - c.reflectance, |j| 1.0 - other(j).reflectance);
+                            }
+                        }
+                    }
                     if let Some(d) = refracted {
                         ray = spawn(scene, &hit, d);
                         medium = c.to;
@@ -362,6 +481,12 @@ fn too_many_photons(photons: usize) -> Error {
     ))
 }
 
+/// Make room for `extra` more band powers in `v`, or fail with [`too_many_photons`].
+fn grow_powers(v: &mut Vec<f32>, extra: usize) -> Result<()> {
+    v.try_reserve(extra)
+        .map_err(|_| too_many_photons(v.len().saturating_add(extra) / 5))
+}
+
 /// Make room for `extra` more photons in `v`, or fail with [`too_many_photons`].
 fn grow(v: &mut Vec<Photon>, extra: usize) -> Result<()> {
     v.try_reserve(extra)
@@ -380,14 +505,40 @@ pub fn trace_emission(
     band: u64,
     control: &Control,
 ) -> Result<PhotonMaps> {
+    let scenes = std::slice::from_ref(scene);
+    let maps = trace_emission_bands(scenes, emission, mode, targets, tag, seed, band, control)?;
+    Ok(maps.into_iter().next().expect("one band"))
+}
+
+/// [`trace_emission`] for the bands of one render at once (`scenes`, sharing their
+/// geometry): with more than one, a spectral pass ([`super::hero`]) whose photons walk in a
+/// hero band each and whose maps (one [`PhotonMaps`] per band) hold the same photons with
+/// each band's power. The streams are those of band key `band`.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_emission_bands(
+    scenes: &[Scene],
+    emission: &Emission,
+    mode: StoreMode,
+    targets: Targets,
+    tag: u64,
+    seed: u64,
+    band: u64,
+    control: &Control,
+) -> Result<Vec<PhotonMaps>> {
     let t0 = Instant::now();
     let photons = emission.photons;
-    let nm = scene.media.len();
+    let nb = scenes.len();
+    let nm = scenes[0].media.len();
     let n_batches = photons.div_ceil(BATCH);
     let chunk = (rayon::current_num_threads() as u64 * 8).max(1);
     let mut volume: Vec<Vec<Photon>> = vec![Vec::new(); nm];
     let mut surface = Vec::new();
     let mut ledger = Ledger::new(nm);
+    let mut powers = BandPowers {
+        volume: vec![Vec::new(); nm],
+        surface: Vec::new(),
+        ledgers: vec![Ledger::new(nm); nb],
+    };
     let mut emitted = 0u64;
     let mut stored = 0u64;
     let mut start = 0;
@@ -402,7 +553,7 @@ pub fn trace_emission(
                 .surface_first
                 .map_or(u64::MAX, |n| n.saturating_sub(b * BATCH));
             trace_batch(
-                scene,
+                scenes,
                 photons,
                 count,
                 mode,
@@ -446,6 +597,17 @@ pub fn trace_emission(
             grow(&mut surface, o.surface.len())?;
             surface.extend_from_slice(&o.surface);
             ledger.add(&o.ledger);
+            if let Some(ob) = o.bands {
+                for (v, ov) in powers.volume.iter_mut().zip(ob.volume) {
+                    grow_powers(v, ov.len())?;
+                    v.extend_from_slice(&ov);
+                }
+                grow_powers(&mut powers.surface, ob.surface.len())?;
+                powers.surface.extend_from_slice(&ob.surface);
+                for (l, ol) in powers.ledgers.iter_mut().zip(&ob.ledgers) {
+                    l.add(ol);
+                }
+            }
             emitted += o.traced;
             if last {
                 break 'chunks;
@@ -470,20 +632,60 @@ pub fn trace_emission(
         for p in volume.iter_mut().flatten().chain(surface.iter_mut()) {
             p.power *= f as f32;
         }
+        for w in powers
+            .volume
+            .iter_mut()
+            .flatten()
+            .chain(powers.surface.iter_mut())
+        {
+            *w *= f as f32;
+        }
         ledger.scale(f);
+        for l in &mut powers.ledgers {
+            l.scale(f);
+        }
     }
     let trace_seconds = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
-    let volume: Vec<PhotonMap> = volume.into_iter().map(PhotonMap::build).collect();
-    let surface = PhotonMap::build(surface);
-    Ok(PhotonMaps {
-        volume,
-        surface,
-        emitted,
-        ledger,
-        trace_seconds,
-        build_seconds: t1.elapsed().as_secs_f64(),
-    })
+    if nb == 1 {
+        let t1 = Instant::now();
+        let volume: Vec<PhotonMap> = volume.into_iter().map(PhotonMap::build).collect();
+        let surface = PhotonMap::build(surface);
+        return Ok(vec![PhotonMaps {
+            volume,
+            surface,
+            emitted,
+            ledger,
+            trace_seconds,
+            build_seconds: t1.elapsed().as_secs_f64(),
+        }]);
+    }
+    // band b's maps: the shared photons with band b's powers
+    let with_band = |photons: &[Photon], w: &[f32], b: usize| -> Vec<Photon> {
+        (photons.iter().zip(w.chunks_exact(nb)))
+            .map(|(p, w)| {
+                let mut p = *p;
+                p.power = w[b];
+                p
+            })
+            .collect()
+    };
+    let mut maps = Vec::with_capacity(nb);
+    for (b, ledger) in powers.ledgers.into_iter().enumerate() {
+        control.check()?;
+        let t = Instant::now();
+        let vol = (volume.iter().zip(&powers.volume))
+            .map(|(v, w)| PhotonMap::build(with_band(v, w, b)))
+            .collect();
+        maps.push(PhotonMaps {
+            volume: vol,
+            surface: PhotonMap::build(with_band(&surface, &powers.surface, b)),
+            emitted,
+            ledger,
+            trace_seconds: trace_seconds / nb as f64,
+            build_seconds: t.elapsed().as_secs_f64(),
+        });
+    }
+    Ok(maps)
 }
 
 /// The maps a camera pass needs: `settings.volume_photons` photons filling the volume maps
@@ -502,15 +704,29 @@ pub fn trace_camera_maps(
     tag: u64,
     control: &Control,
 ) -> Result<PhotonMaps> {
+    let scenes = std::slice::from_ref(scene);
+    let maps = trace_camera_maps_bands(scenes, settings, mode, tag, control)?;
+    Ok(maps.into_iter().next().expect("one band"))
+}
+
+/// [`trace_camera_maps`] for the bands of one render at once: with more than one scene, a
+/// spectral pass ([`trace_emission_bands`]) giving each band its maps.
+pub fn trace_camera_maps_bands(
+    scenes: &[Scene],
+    settings: &crate::integrators::settings::Settings,
+    mode: StoreMode,
+    tag: u64,
+    control: &Control,
+) -> Result<Vec<PhotonMaps>> {
     let (seed, band) = (settings.seed, settings.band);
     let emission = Emission {
         photons: settings.volume_photons,
         stored_cap: (settings.volume_stored > 0).then_some(settings.volume_stored),
-        aim: Aim::new(scene, settings.aim),
+        aim: Aim::new(&scenes[0], settings.aim),
         surface_first: Some(settings.photons),
     };
-    let mut maps = trace_emission(
-        scene,
+    let mut all = trace_emission_bands(
+        scenes,
         &emission,
         mode,
         Targets::BOTH,
@@ -519,15 +735,18 @@ pub fn trace_camera_maps(
         band,
         control,
     )?;
-    let from_volume = settings.photons.min(maps.emitted);
+    let emitted = all[0].emitted;
+    let from_volume = settings.photons.min(emitted);
     let rest = settings.photons - from_volume;
     // progress counts `photons` surface photons (render.rs): these are done
     control.add_done(from_volume);
     if from_volume > 0 {
         // the volume pass's photons carry Φ / (its photons emitted); as part of an emission
         // of `photons` photons they carry Φ / photons (its tree stands: powers do not move it)
-        maps.surface
-            .scale_powers(maps.emitted as f64 / settings.photons as f64);
+        for maps in &mut all {
+            maps.surface
+                .scale_powers(emitted as f64 / settings.photons as f64);
+        }
     }
     if rest > 0 {
         // the surface pass is aimed too: the light that reaches a surface through a medium
@@ -542,8 +761,8 @@ pub fn trace_camera_maps(
             surface: true,
         };
         let tag = SURFACE_PASS | tag;
-        let mut surf = trace_emission(
-            scene,
+        let surfs = trace_emission_bands(
+            scenes,
             &surface_emission,
             mode,
             surf_only,
@@ -552,20 +771,24 @@ pub fn trace_camera_maps(
             band,
             control,
         )?;
-        surf.surface
-            .scale_powers(rest as f64 / settings.photons as f64);
-        let t0 = Instant::now();
-        let pooled = (maps.surface.photons().iter())
-            .chain(surf.surface.photons())
-            .copied()
-            .collect();
-        maps.surface = PhotonMap::build(pooled);
-        maps.emitted += surf.emitted;
-        maps.trace_seconds += surf.trace_seconds;
-        maps.build_seconds += surf.build_seconds + t0.elapsed().as_secs_f64();
+        for (maps, mut surf) in all.iter_mut().zip(surfs) {
+            surf.surface
+                .scale_powers(rest as f64 / settings.photons as f64);
+            let t0 = Instant::now();
+            let pooled = (maps.surface.photons().iter())
+                .chain(surf.surface.photons())
+                .copied()
+                .collect();
+            maps.surface = PhotonMap::build(pooled);
+            maps.emitted += surf.emitted;
+            maps.trace_seconds += surf.trace_seconds;
+            maps.build_seconds += surf.build_seconds + t0.elapsed().as_secs_f64();
+        }
     }
-    maps.ledger.stored_surface = maps.surface.total_power();
-    Ok(maps)
+    for maps in &mut all {
+        maps.ledger.stored_surface = maps.surface.total_power();
+    }
+    Ok(all)
 }
 
 #[cfg(test)]

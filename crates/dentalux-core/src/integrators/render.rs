@@ -1,9 +1,10 @@
-//! Rendering one band: the dispatch on `settings.integrator`
+//! Rendering one band, or all bands of a scene: the dispatch on `settings.integrator`
 //! ([`Settings`](super::settings::Settings), docs/render-contract.md).
 //!
 //! Progress (`control.done()`) counts photons traced plus pixels finished: a progress bar's
 //! total is `photons` (0 for `path`) + width × height.
 
+use super::photon_trace::trace_camera_maps_bands;
 use super::settings::{Integrator, Settings, Stats, VolumeEstimator};
 use crate::control::Control;
 use crate::error::{Error, Result};
@@ -18,30 +19,8 @@ pub fn render_band(
     settings: &Settings,
     control: &Control,
 ) -> Result<(Vec<f32>, Stats)> {
-    settings.validate()?;
     let t0 = Instant::now();
-    let reseeded;
-    let settings = if settings.pass_index > 0 && settings.integrator != Integrator::Ppm {
-        reseeded = Settings {
-            seed: pass_seed(settings.seed, settings.pass_index),
-            ..*settings
-        };
-        &reseeded
-    } else {
-        settings
-    };
-    if settings.estimator() == VolumeEstimator::Beam && !scene.media.iter().any(|m| m.sigma_s > 0.0)
-    {
-        let what = if settings.integrator == Integrator::Bre {
-            "settings.integrator = \"bre\""
-        } else {
-            "settings.volume_estimator = \"beam\""
-        };
-        return Err(Error::InvalidInput(format!(
-            "{what} estimates light scattered in media, and this scene has no scattering \
-             medium (every medium has mus = 0): use \"pm\" or \"path\""
-        )));
-    }
+    let settings = &effective(scene, settings)?;
     let (image, mut stats) = match settings.integrator {
         Integrator::Path => super::path::render(scene, settings, control)?,
         Integrator::Pm => super::pm::render(scene, settings, control)?,
@@ -54,6 +33,29 @@ pub fn render_band(
     stats.seconds_total = t0.elapsed().as_secs_f64();
     stats.spp = settings.spp;
     Ok((image, stats))
+}
+
+/// The settings a band renders with, checked: validated, the seed of pass `pass_index` for
+/// the one-pass integrators (`ppm` schedules its passes itself), and the beam refused in a
+/// scene without a scattering medium.
+fn effective(scene: &Scene, settings: &Settings) -> Result<Settings> {
+    settings.validate()?;
+    let mut s = *settings;
+    if s.pass_index > 0 && s.integrator != Integrator::Ppm {
+        s.seed = pass_seed(s.seed, s.pass_index);
+    }
+    if s.estimator() == VolumeEstimator::Beam && !scene.media.iter().any(|m| m.sigma_s > 0.0) {
+        let what = if s.integrator == Integrator::Bre {
+            "settings.integrator = \"bre\""
+        } else {
+            "settings.volume_estimator = \"beam\""
+        };
+        return Err(Error::InvalidInput(format!(
+            "{what} estimates light scattered in media, and this scene has no scattering \
+             medium (every medium has mus = 0): use \"pm\" or \"path\""
+        )));
+    }
+    Ok(s)
 }
 
 /// Render several bands of one scene (`scenes[b]`, e.g. from
@@ -73,9 +75,52 @@ pub fn render_bands(
             scenes.len()
         )));
     }
+    if settings.spectral_photons && scenes.len() > 1 {
+        return render_spectral(scenes, settings, band_keys, control);
+    }
     scenes
         .iter()
         .zip(band_keys)
         .map(|(scene, &band)| render_band(scene, &Settings { band, ..*settings }, control))
         .collect()
+}
+
+/// [`render_bands`] with one spectral photon pass for all bands (`integrators::hero`), then
+/// each band's camera pass over its maps, all with the streams of the first band's key (so
+/// a pixel sample follows the same path in every band where the indices agree). Photons are
+/// traced once: progress counts them once.
+fn render_spectral(
+    scenes: &[Scene],
+    settings: &Settings,
+    band_keys: &[u64],
+    control: &Control,
+) -> Result<Vec<(Vec<f32>, Stats)>> {
+    let t0 = Instant::now();
+    let first = effective(
+        &scenes[0],
+        &Settings {
+            band: band_keys[0],
+            ..*settings
+        },
+    )?;
+    for scene in &scenes[1..] {
+        effective(scene, &first)?;
+    }
+    let full = first.integrator == Integrator::VpmFull;
+    let all = trace_camera_maps_bands(scenes, &first, super::vpm::store_mode(full), 0, control)?;
+    let traced = t0.elapsed().as_secs_f64() / scenes.len() as f64;
+    let mut out = Vec::with_capacity(scenes.len());
+    for (scene, maps) in scenes.iter().zip(all) {
+        let t = Instant::now();
+        // every band's camera pass draws the same random numbers (the first band's key):
+        // with the same photons and the same camera paths the bands' noise is shared
+        let s = first;
+        let (image, mut stats) = super::vpm::render_with_maps(scene, &s, control, full, &maps)?;
+        drop(maps);
+        stats.seconds_total = traced + t.elapsed().as_secs_f64();
+        stats.spp = s.spp;
+        stats.extra.push(("spectral_photons".into(), 1.0));
+        out.push((image, stats));
+    }
+    Ok(out)
 }

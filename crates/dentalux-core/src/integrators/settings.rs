@@ -93,6 +93,15 @@ impl Integrator {
             Integrator::Vpm | Integrator::VpmFull | Integrator::Ppm | Integrator::Bre
         )
     }
+
+    /// Whether a multi-band render may trace one spectral photon pass for all its bands
+    /// (`settings.spectral_photons`): the one-pass volume integrators.
+    pub fn shares_spectral_photons(self) -> bool {
+        matches!(
+            self,
+            Integrator::Vpm | Integrator::VpmFull | Integrator::Bre
+        )
+    }
 }
 
 /// How the camera pass estimates multiple scattering from a volume photon map.
@@ -185,6 +194,10 @@ pub struct Settings {
     pub kernel_clip: bool,
     /// `vpm`, `vpm-full`, `ppm`: the volume estimator (`bre` is `vpm` with the beam).
     pub volume_estimator: VolumeEstimator,
+    /// `vpm`, `vpm-full`, `bre` over several bands: one spectral photon pass for all bands
+    /// (hero-band walks, balance-heuristic powers: `integrators::hero`) instead of one
+    /// pass per band, so every band's maps hold the same photons.
+    pub spectral_photons: bool,
 }
 
 impl Settings {
@@ -220,6 +233,7 @@ impl Default for Settings {
             kernel_layer: DEFAULT_LAYER,
             kernel_clip: DEFAULT_CLIP,
             volume_estimator: VolumeEstimator::Points,
+            spectral_photons: false,
         }
     }
 }
@@ -284,7 +298,7 @@ const fn unit_interval(lo_open: bool, hi_open: bool) -> Range {
 /// Every key of the settings contract, in the order the docs and error messages list them.
 /// Defaults are [`Settings::default`]'s; `threads` (worker threads, default all cores) is
 /// read by the contract decoder, not stored in [`Settings`].
-pub const KEYS: [Key; 20] = [
+pub const KEYS: [Key; 21] = [
     key("integrator", Range::Integrator, true),
     key("spp", at_least(1), true),
     key("photons", at_least(0), true),
@@ -306,6 +320,7 @@ pub const KEYS: [Key; 20] = [
         Range::Choice(&VolumeEstimator::NAMES),
         true,
     ),
+    key("spectral_photons", Range::Boolean, true),
     key("pass_index", at_least(0), false),
     key("band", at_least(0), false),
     key("threads", at_least(1), false),
@@ -377,6 +392,17 @@ impl Settings {
                 "settings.volume_estimator = \"beam\" applies to the volume photon integrators \
                  ({}), not to settings.integrator = {:?}",
                 volume.join(", "),
+                self.integrator.name()
+            )));
+        }
+        if self.spectral_photons && !self.integrator.shares_spectral_photons() {
+            let allowed: Vec<&str> = (Integrator::ALL.iter())
+                .filter(|(i, _)| i.shares_spectral_photons())
+                .map(|(_, n)| *n)
+                .collect();
+            return Err(Error::InvalidInput(format!(
+                "settings.spectral_photons = true applies to {}, not to settings.integrator = {:?}",
+                allowed.join(", "),
                 self.integrator.name()
             )));
         }

@@ -647,12 +647,29 @@ pub fn render(
     control: &Control,
     full: bool,
 ) -> Result<(Vec<f32>, Stats)> {
-    let mode = if full {
+    let maps = trace_camera_maps(scene, settings, store_mode(full), 0, control)?;
+    render_with_maps(scene, settings, control, full, &maps)
+}
+
+/// What the volume maps of `vpm` (`full` false) or `vpm-full` store.
+pub fn store_mode(full: bool) -> StoreMode {
+    if full {
         StoreMode::All
     } else {
         StoreMode::Paper
-    };
-    let maps = trace_camera_maps(scene, settings, mode, 0, control)?;
+    }
+}
+
+/// The camera pass of [`render`] over photon maps already traced (a spectral pass's maps
+/// of this band, `integrators::hero`).
+pub fn render_with_maps(
+    scene: &Scene,
+    settings: &Settings,
+    control: &Control,
+    full: bool,
+    maps: &PhotonMaps,
+) -> Result<(Vec<f32>, Stats)> {
+    let mode = store_mode(full);
     let params = VpmParams {
         k: settings.k,
         radius: settings.radius,
@@ -663,7 +680,7 @@ pub fn render(
         clip: settings.kernel_clip,
         ..VpmParams::default()
     };
-    let mut vpm = Vpm::new(scene, &maps, params);
+    let mut vpm = Vpm::new(scene, maps, params);
     let t_beams = Instant::now();
     let beam = settings.estimator() == VolumeEstimator::Beam;
     if beam {
