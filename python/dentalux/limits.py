@@ -210,7 +210,9 @@ def check_slab(n_photons, threads=None, radial_bins: int | None = None,
 def render_memory_bytes(width: int, height: int, bands: int, settings: dict) -> float:
     """A render's largest allocations: the film and radiance cube per pixel and band, the
     colour images per pixel, and the photon maps: at least one stored photon per photon
-    emitted (the volume maps hold ``volume_stored`` where that budget is set)."""
+    emitted (the volume maps hold ``volume_stored`` where that budget is set), for one band
+    at a time, or for every band at once with ``spectral_photons`` (their maps are built
+    together, with each photon's power in every band while they are traced)."""
     pixels = float(width) * float(height)
     need = pixels * (bands * PIXEL_BAND_BYTES + PIXEL_COLOUR_BYTES)
     integrator = settings.get("integrator")
@@ -219,7 +221,10 @@ def render_memory_bytes(width: int, height: int, bands: int, settings: dict) -> 
         if integrator in VOLUME_INTEGRATORS:
             stored = settings.get("volume_stored") or settings.get("volume_photons") or 0
             photons += float(stored)
-        need += photons * PHOTON_BYTES * 1.05
+        maps = 1.0
+        if settings.get("spectral_photons") and bands > 1:
+            maps = bands + bands * 4.0 / PHOTON_BYTES
+        need += photons * PHOTON_BYTES * 1.05 * maps
     return need
 
 

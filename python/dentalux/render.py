@@ -159,8 +159,10 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     w, h = res
     limits.check_render(settings, w, h, len(band_list))
     # The core's progress(done) counts photons traced plus pixels finished, summed over the
-    # bands (render.rs).
-    work = max(1, photons_traced(settings) * settings["passes"] + w * h) * len(band_list)
+    # bands, or once for a spectral photon pass (render.rs)
+    nb = len(band_list)
+    photon_bands = 1 if settings.get("spectral_photons") and nb > 1 else nb
+    work = max(1, photons_traced(settings) * settings["passes"] * photon_bands + w * h * nb)
     ticks = len(band_list) * TICKS
     t_load = time.perf_counter() - t0
     keys = [0 if correlated_bands else int(round(wl)) for wl in band_list]

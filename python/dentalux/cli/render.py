@@ -95,6 +95,12 @@ def render_command(
         None, "--volume-estimator",
         help="vpm, vpm-full, ppm: 'points' (eq. 11, ray marching) or 'beam' (the beam "
              "radiance estimate; what --integrator bre uses)"),
+    spectral_photons: bool = typer.Option(
+        None, "--spectral-photons/--no-spectral-photons",
+        help="vpm, vpm-full, bre over several bands: one photon pass for all bands (hero-band "
+             "walks with balance-heuristic powers) and shared camera paths, so noise is "
+             "shared between bands (less coloured speckle) and photons are traced once "
+             "(default: off; docs/spectral-photons.md)"),
     match: str = typer.Option(
         None, "--match",
         help="a shade guide (see `dentalux shade --help`): colour.json gives each measured "
@@ -127,7 +133,8 @@ def render_command(
                                    ("radius", radius), ("step", step), ("alpha", alpha),
                                    ("kernel_layer", kernel_layer),
                                    ("kernel_clip", kernel_clip),
-                                   ("volume_estimator", volume_estimator))
+                                   ("volume_estimator", volume_estimator),
+                                   ("spectral_photons", spectral_photons))
                if v is not None}
     common = dict(integrator=integrator, spp=spp, photons=photons, bands=band_list,
                   seed=seed, threads=threads, resolution=res,

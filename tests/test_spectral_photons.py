@@ -1,0 +1,72 @@
+"""The spectral photon pass from the command line and the Python API: `--spectral-photons`
+reaches the core and render.json, the photons are traced once (the progress count says so),
+and it is refused where it cannot apply (integrators without a one-pass volume photon map,
+progressive and distributed renders, which run a task per band). The physics (closed-form
+ledgers per band, agreement with band-by-band passes, the shared noise) is the core's test:
+crates/dentalux-core/tests/spectral_photons.rs."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import dentalux
+import numpy as np
+import pytest
+from dentalux import limits
+from dentalux.scene.builtin import discs
+
+DENTALUX = str(Path(sys.executable).with_name("dentalux"))
+SCENES = Path(__file__).resolve().parents[1] / "scenes"
+FAST = ["--resolution", "24x18", "--spp", "1", "--bands", "450,540,605", "--photons", "2000",
+        "--volume-photons", "20000"]
+
+
+def cli(*args):
+    return subprocess.run([DENTALUX, *args], capture_output=True, text=True, timeout=120)
+
+
+def test_cli_spectral_render_records_it(tmp_path):
+    out = tmp_path / "s"
+    r = cli("render", str(SCENES / "discs.toml"), "--out", str(out), "--spectral-photons",
+            "--seed", "3", *FAST, "--json")
+    assert r.returncode == 0, r.stderr
+    summary = json.loads((out / "render.json").read_text())
+    assert summary["settings"]["spectral_photons"] is True
+    assert all(b["spectral_photons"] == 1.0 for b in summary["stats"])
+    # one photon pass: every band's maps hold the same photons
+    assert len({b["volume_photons"] for b in summary["stats"]}) == 1
+    img = np.load(out / "radiance.npy")
+    assert img.shape == (18, 24, 3) and np.isfinite(img).all() and (img.mean(axis=(0, 1)) > 0).all()
+
+
+def test_api_progress_counts_photons_once():
+    seen = []
+    res = dentalux.render(discs(resolution=(16, 12)), integrator="vpm", spp=1, photons=1000,
+                          volume_photons=5000, bands=[450, 540, 605], spectral_photons=True,
+                          progress=lambda done, total: seen.append((done, total)))
+    assert res.radiance.shape == (12, 16, 3)
+    done, total = seen[-1]
+    assert done == total
+    # the core's count reached the end before the bar was closed: photons once, pixels per band
+    assert max(d for d, _ in seen[:-1] or [(0, 0)]) <= total
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--integrator", "pm"], "settings.spectral_photons = true applies to vpm, vpm-full, bre"),
+    (["--passes", "2"], "spectral_photons = true: a progressive or distributed render"),
+])
+def test_refusals_name_the_setting(tmp_path, args, message):
+    r = cli("render", str(SCENES / "discs.toml"), "--out", str(tmp_path / "o"),
+            "--spectral-photons", *FAST, *args)
+    assert r.returncode == 2, r.stderr
+    assert message in r.stderr and "Traceback" not in r.stderr
+
+
+def test_memory_counts_every_band_maps():
+    s = {"integrator": "vpm", "photons": 1_000_000, "volume_photons": 10_000_000,
+         "spectral_photons": False}
+    one = limits.render_memory_bytes(64, 48, 3, s)
+    three = limits.render_memory_bytes(64, 48, 3, dict(s, spectral_photons=True))
+    maps = 11_000_000 * limits.PHOTON_BYTES * 1.05
+    assert three - one == pytest.approx(maps * (2 + 3 * 4 / limits.PHOTON_BYTES), rel=1e-9)
