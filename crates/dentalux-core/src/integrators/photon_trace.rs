@@ -648,8 +648,10 @@ pub fn trace_emission_bands(
     let trace_seconds = t0.elapsed().as_secs_f64();
     if nb == 1 {
         let t1 = Instant::now();
-        let volume: Vec<PhotonMap> = volume.into_iter().map(PhotonMap::build).collect();
-        let surface = PhotonMap::build(surface);
+        let volume = (volume.into_iter())
+            .map(|v| PhotonMap::try_build(v, control))
+            .collect::<Result<Vec<_>>>()?;
+        let surface = PhotonMap::try_build(surface, control)?;
         return Ok(vec![PhotonMaps {
             volume,
             surface,
@@ -674,11 +676,11 @@ pub fn trace_emission_bands(
         control.check()?;
         let t = Instant::now();
         let vol = (volume.iter().zip(&powers.volume))
-            .map(|(v, w)| PhotonMap::build(with_band(v, w, b)))
-            .collect();
+            .map(|(v, w)| PhotonMap::try_build(with_band(v, w, b), control))
+            .collect::<Result<Vec<_>>>()?;
         maps.push(PhotonMaps {
             volume: vol,
-            surface: PhotonMap::build(with_band(&surface, &powers.surface, b)),
+            surface: PhotonMap::try_build(with_band(&surface, &powers.surface, b), control)?,
             emitted,
             ledger,
             trace_seconds: trace_seconds / nb as f64,
@@ -779,7 +781,7 @@ pub fn trace_camera_maps_bands(
                 .chain(surf.surface.photons())
                 .copied()
                 .collect();
-            maps.surface = PhotonMap::build(pooled);
+            maps.surface = PhotonMap::try_build(pooled, control)?;
             maps.emitted += surf.emitted;
             maps.trace_seconds += surf.trace_seconds;
             maps.build_seconds += surf.build_seconds + t0.elapsed().as_secs_f64();

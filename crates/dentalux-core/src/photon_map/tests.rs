@@ -473,3 +473,24 @@ fn flattened_disc_irradiance_is_unbiased_on_a_uniform_plane() {
         "at the wall: {m} vs {density} ± {se}"
     );
 }
+
+/// A build asked to stop (Ctrl-C during a large map's build) ends with `Cancelled`; one not
+/// asked to stop is the plain build's tree.
+#[test]
+fn try_build_stops_when_cancelled_and_is_build_otherwise() {
+    let mut rng = Stream::new(4, 0, 0);
+    let photons: Vec<Photon> = (0..200_000)
+        .map(|_| Photon::new(uniform_sphere(rng.uniform2()) * 3.0, Vec3::Z, 1.0))
+        .collect();
+    let control = crate::control::Control::new();
+    let built = PhotonMap::try_build(photons.clone(), &control).unwrap();
+    let plain = PhotonMap::build(photons.clone());
+    assert!(built
+        .photons()
+        .iter()
+        .zip(plain.photons())
+        .all(|(a, b)| a.position() == b.position()));
+    control.cancel();
+    let e = PhotonMap::try_build(photons, &control).unwrap_err();
+    assert!(matches!(e, crate::Error::Cancelled));
+}

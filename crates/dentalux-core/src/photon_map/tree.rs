@@ -1,6 +1,8 @@
 //! The photon record and the photon map: a balanced kd-tree over the records, with
 //! k-nearest and fixed-radius queries.
 
+use crate::control::Control;
+use crate::error::{Error, Result};
 use crate::math::Vec3;
 
 /// Size of one stored photon [bytes].
@@ -163,9 +165,11 @@ pub struct PhotonMap {
     photons: Vec<Photon>,
 }
 
-fn build_rec(p: &mut [Photon]) {
+/// Arrange `p` as a kd-tree; subtrees of at least [`PAR_BUILD`] photons first ask `stop`,
+/// and a stopped build leaves its subtree unordered (the caller discards it).
+fn build_rec(p: &mut [Photon], stop: &(dyn Fn() -> bool + Sync)) {
     let n = p.len();
-    if n <= LEAF {
+    if n <= LEAF || (n >= PAR_BUILD && stop()) {
         return;
     }
     // split along the axis of largest extent, at the median
@@ -191,10 +195,10 @@ fn build_rec(p: &mut [Photon]) {
     let (l, r) = p.split_at_mut(mid);
     let r = &mut r[1..];
     if n >= PAR_BUILD {
-        rayon::join(|| build_rec(l), || build_rec(r));
+        rayon::join(|| build_rec(l, stop), || build_rec(r, stop));
     } else {
-        build_rec(l);
-        build_rec(r);
+        build_rec(l, stop);
+        build_rec(r, stop);
     }
 }
 
@@ -206,12 +210,25 @@ pub(super) fn dist2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
 
 impl PhotonMap {
     /// Build the tree from photons (parallel for large maps; O(n log n)).
-    pub fn build(mut photons: Vec<Photon>) -> Self {
+    pub fn build(photons: Vec<Photon>) -> Self {
+        Self::build_until(photons, &|| false).expect("a build nobody stops")
+    }
+
+    /// [`PhotonMap::build`], stopping with [`Error::Cancelled`] once `control` is cancelled
+    /// (a 100 M-photon map takes seconds to build; Ctrl-C must not wait for it).
+    pub fn try_build(photons: Vec<Photon>, control: &Control) -> Result<Self> {
+        Self::build_until(photons, &|| control.is_cancelled())
+    }
+
+    fn build_until(mut photons: Vec<Photon>, stop: &(dyn Fn() -> bool + Sync)) -> Result<Self> {
         // drop photons whose position is not finite: they would poison the ordering
         photons.retain(|p| p.pos.iter().all(|c| c.is_finite()) && p.power.is_finite());
         photons.shrink_to_fit();
-        build_rec(&mut photons);
-        Self { photons }
+        build_rec(&mut photons, stop);
+        if stop() {
+            return Err(Error::Cancelled);
+        }
+        Ok(Self { photons })
     }
     /// Number of stored photons.
     pub fn len(&self) -> usize {
