@@ -6,22 +6,14 @@ checks (against volpath-nee, the furnace closed form, the progressive form) are 
 tests: crates/dentalux-core/tests/beam_estimate.rs."""
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import dentalux
 import numpy as np
 import pytest
+from cli_run import SCENES, cli
 
-DENTALUX = str(Path(sys.executable).with_name("dentalux"))
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
 FAST = ["--resolution", "24x18", "--spp", "1", "--bands", "540", "--photons", "2000",
         "--volume-photons", "20000"]
-
-
-def cli(*args):
-    return subprocess.run([DENTALUX, *args], capture_output=True, text=True, timeout=120)
 
 
 def test_bre_renders_and_records_its_estimator(tmp_path):

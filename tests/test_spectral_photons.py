@@ -6,24 +6,16 @@ ledgers per band, agreement with band-by-band passes, the shared noise) is the c
 crates/dentalux-core/tests/spectral_photons.rs."""
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import dentalux
 import numpy as np
 import pytest
+from cli_run import SCENES, cli
 from dentalux import limits
 from dentalux.scene.builtin import discs
 
-DENTALUX = str(Path(sys.executable).with_name("dentalux"))
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
 FAST = ["--resolution", "24x18", "--spp", "1", "--bands", "450,540,605", "--photons", "2000",
         "--volume-photons", "20000"]
-
-
-def cli(*args):
-    return subprocess.run([DENTALUX, *args], capture_output=True, text=True, timeout=120)
 
 
 def test_cli_spectral_render_records_it(tmp_path):

@@ -59,31 +59,13 @@ fn passes(scenes: &[Scene], n: u64, mode: StoreMode, runs: u64) -> Vec<Vec<Photo
 #[test]
 fn infinite_medium_ledger_per_band() {
     let bands = [(0.9, 0.3), (0.8, 0.6), (0.95, 0.0)];
-    let speck = shape(
-        Geometry::Sphere(Sphere {
-            center: Vec3::splat(1e4),
-            radius: 1.0,
-        }),
-        Boundary::Opaque { surface: 0 },
-    );
-    let light = Light::Point {
-        position: Vec3::ZERO,
-        intensity: 2.0,
-    };
-    let first = Scene::new(
-        camera(Vec3::new(0.0, -5.0, 0.0), Vec3::ZERO, 4, 4),
-        vec![medium(1.0 - bands[0].0, bands[0].0, bands[0].1, 1.0)],
-        vec![Surface::Black],
-        vec![speck],
-        vec![light],
-        0,
-    )
-    .unwrap();
+    let scene = |(a, g): (f64, f64)| vec![medium(1.0 - a, a, g, 1.0)];
+    let first = common::point_in_infinite_medium(scene(bands[0]));
     let scenes: Vec<Scene> = (bands.iter())
-        .map(|&(a, g)| {
-            let m: Vec<Medium> = vec![medium(1.0 - a, a, g, 1.0)];
+        .map(|&b| {
+            let m: Vec<Medium> = scene(b);
             first
-                .with_band(m, vec![Surface::Black], vec![light])
+                .with_band(m, first.surfaces.clone(), first.lights.clone())
                 .unwrap()
         })
         .collect();

@@ -94,28 +94,7 @@ fn rmse(a: &[f64], b: &[f64]) -> f64 {
 #[test]
 fn ledger_infinite_medium() {
     let a = 0.9;
-    let media = vec![medium(1.0 - a, a, 0.3, 1.0)];
-    // a far black speck: the scene needs a shape; no photon travels 10⁴ mean free paths
-    let speck = shape(
-        Geometry::Sphere(Sphere {
-            center: Vec3::splat(1e4),
-            radius: 1.0,
-        }),
-        Boundary::Opaque { surface: 0 },
-    );
-    let light = Light::Point {
-        position: Vec3::ZERO,
-        intensity: 2.0,
-    };
-    let scene = Scene::new(
-        camera(Vec3::new(0.0, -5.0, 0.0), Vec3::ZERO, 4, 4),
-        media,
-        vec![Surface::Black],
-        vec![speck],
-        vec![light],
-        0,
-    )
-    .unwrap();
+    let scene = common::point_in_infinite_medium(vec![medium(1.0 - a, a, 0.3, 1.0)]);
     let phi = 4.0 * PI * 2.0;
     let n = 100_000u64;
     // per photon: count of events N ~ Geometric, sd = sqrt(a)/(1 − a)

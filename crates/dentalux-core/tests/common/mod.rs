@@ -139,3 +139,27 @@ pub fn nested_spheres() -> Scene {
     )
     .unwrap()
 }
+
+/// An unbounded medium around a point light of intensity 2 at the origin: `media[0]` fills
+/// space and a far black speck is the scene's only shape (no photon travels 10⁴ mm).
+pub fn point_in_infinite_medium(media: Vec<Medium>) -> Scene {
+    let speck = shape(
+        Geometry::Sphere(Sphere {
+            center: Vec3::splat(1e4),
+            radius: 1.0,
+        }),
+        Boundary::Opaque { surface: 0 },
+    );
+    Scene::new(
+        camera(Vec3::new(0.0, -5.0, 0.0), Vec3::ZERO, 4, 4),
+        media,
+        vec![Surface::Black],
+        vec![speck],
+        vec![Light::Point {
+            position: Vec3::ZERO,
+            intensity: 2.0,
+        }],
+        0,
+    )
+    .unwrap()
+}
