@@ -25,11 +25,24 @@ def test_cli_spectral_render_records_it(tmp_path):
     assert r.returncode == 0, r.stderr
     summary = json.loads((out / "render.json").read_text())
     assert summary["settings"]["spectral_photons"] is True
+    # the Table 1 biomaterial's index varies with wavelength: the user is told what that costs
+    assert any("media.disc's refractive index differs" in w for w in summary["warnings"])
     assert all(b["spectral_photons"] == 1.0 for b in summary["stats"])
     # one photon pass: every band's maps hold the same photons
     assert len({b["volume_photons"] for b in summary["stats"]}) == 1
     img = np.load(out / "radiance.npy")
     assert img.shape == (18, 24, 3) and np.isfinite(img).all() and (img.mean(axis=(0, 1)) > 0).all()
+
+
+def test_no_warning_where_the_indices_agree():
+    d = discs(resolution=(8, 6))
+    d["media"]["disc"] = {"material": "enamel"}  # n 1.633 at every band
+    res = dentalux.render(d, integrator="vpm", spp=1, photons=500, volume_photons=2000,
+                          bands=[450, 540, 605], spectral_photons=True, progress=False)
+    assert res.stats["warnings"] == []
+    plain = dentalux.render(discs(resolution=(8, 6)), integrator="vpm", spp=1, photons=500,
+                            volume_photons=2000, bands=[450, 540, 605], progress=False)
+    assert plain.stats["warnings"] == []
 
 
 def test_api_progress_counts_photons_once():

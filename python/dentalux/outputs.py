@@ -97,9 +97,13 @@ def write_render_outputs(scene: Scene, result, out: Path, regions: dict | None =
                     for key in sorted({k for b in result.stats["bands"] for k in b
                                        if "photon" in k})},
         "stats": result.stats["bands"],
+        "warnings": list(result.stats.get("warnings", [])),
         "files": files,
         "files_read": scene.files_read() if hasattr(scene, "files_read") else [],
     }
+    if warn:
+        for w in summary["warnings"]:
+            warn(f"warning: {w}")
     divisor, illuminant, light_white = colour_inputs(scene, result.bands)
     if regions is None and tuple(result.radiance.shape[1::-1]) == tuple(scene.resolution):
         regions = scene.description.get("regions") or None

@@ -67,6 +67,22 @@ def check_finite(image: np.ndarray, wavelength_nm: float) -> None:
             "intensity and the transforms' scale")
 
 
+def spectral_warnings(sc: Scene, bands) -> list[str]:
+    """What a spectral photon pass over ``bands`` should be told: media whose refractive
+    index differs between the bands, where a refraction in one band is a direction the others
+    cannot draw (docs/spectral-photons.md), so light refracted into them is carried by each
+    band's own hero photons only."""
+    out = []
+    for name in sc.media_names:
+        n = [sc.medium_at(name, wl)["n"] for wl in bands]
+        if max(n) != min(n):
+            out.append(f"spectral_photons: media.{name}'s refractive index differs between "
+                       f"the bands ({min(n):g} to {max(n):g}), so walks refracted into or out "
+                       "of it are not shared: each band keeps about 1/bands of those photons "
+                       "and its colour is noisier than band-by-band passes")
+    return out
+
+
 def core_render_bands():
     """The native ``render_bands``, or a clear error while the core lacks it."""
     fn = getattr(_core, "render_bands", None)
@@ -166,6 +182,7 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     ticks = len(band_list) * TICKS
     t_load = time.perf_counter() - t0
     keys = [0 if correlated_bands else int(round(wl)) for wl in band_list]
+    warnings = spectral_warnings(sc, band_list) if photon_bands < nb else []
     with bar(ticks, f"render {len(band_list)} band(s)", progress) as cb:
 
         def tick(done: int) -> None:
@@ -194,6 +211,7 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
         "seconds_per_band": seconds,
         "seconds_total": time.perf_counter() - t0,
         "bands": per_band,
+        "warnings": warnings,
     }
     for key in ("photons_emitted", "photons_stored", "surface_photons", "volume_photons"):
         vals = [s[key] for s in per_band if isinstance(s.get(key), Real)]
