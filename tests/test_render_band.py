@@ -170,3 +170,37 @@ def test_render_bands_refusals():
         _core.render_bands(json.dumps({**shared, "bands": []}), settings, [])
     cube, stats = _core.render_bands(two, settings, [7, 7])
     assert cube.shape == (2, 8, 12) and np.array_equal(cube[0], cube[1]) and len(stats) == 2
+
+
+def test_bands_of_textured_scenes_go_one_call_each(monkeypatch):
+    """An image texture is in every band's surfaces: such scenes send one band per core call
+    (one copy of the pixels at a time), others all bands in one; the images are the same
+    as one render_band per band either way."""
+    import dentalux
+    from dentalux.render import build_settings
+    from dentalux.scene import scene_from_dict
+    from dentalux.scene.builtin import cornell_box
+
+    calls = []
+    real = _core.render_bands
+
+    def counting(scene_json, settings_json, keys, progress=None):
+        calls.append(len(keys))
+        return real(scene_json, settings_json, keys, progress)
+
+    monkeypatch.setattr(_core, "render_bands", counting)
+    textured = cornell_box(resolution=(8, 6))
+    textured["surfaces"]["white"] = {"type": "image", "width": 2, "height": 2,
+                                     "data": [0.2, 0.8, 0.8, 0.2], "mapping": "uv"}
+    bands = [450.0, 540.0, 605.0]
+    opts = dict(integrator="pm", spp=1, photons=2000, seed=3)
+    for d, expect in ((textured, [1, 1, 1]), (cornell_box(resolution=(8, 6)), [3])):
+        calls.clear()
+        sc = scene_from_dict(d)
+        res = dentalux.render(sc, bands=bands, progress=False, **opts)
+        assert calls == expect
+        settings = build_settings(sc, **opts)
+        for b, wl in enumerate(bands):
+            image, _ = _core.render_band(sc.to_json(wl, (8, 6)),
+                                         json.dumps({**settings, "band": int(wl)}))
+            assert np.array_equal(res.radiance[..., b], image)

@@ -174,25 +174,46 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     render_bands = core_render_bands()
     w, h = res
     limits.check_render(settings, w, h, len(band_list))
-    # The core's progress(done) counts photons traced plus pixels finished, summed over the
-    # bands, or once for a spectral photon pass (render.rs)
     nb = len(band_list)
-    photon_bands = 1 if settings.get("spectral_photons") and nb > 1 else nb
-    work = max(1, photons_traced(settings) * settings["passes"] * photon_bands + w * h * nb)
-    ticks = len(band_list) * TICKS
+    spectral = bool(settings.get("spectral_photons")) and nb > 1
+    # Bands go to the core together, except in scenes with image textures: every band's
+    # surfaces carry a texture's pixels, so those bands go one at a time (one copy in memory)
+    # unless a spectral pass needs them all at once, which the memory check then counts.
+    texels = sc.texels()
+    if texels and spectral:
+        limits.check_memory(texels * limits.TEXEL_BYTES * nb,
+                            f"spectral_photons with {nb} bands of {texels:,} texture pixels")
+    groups = [list(range(nb))] if spectral or not texels else [[b] for b in range(nb)]
+    # The core's progress(done) counts photons traced plus pixels finished, summed over the
+    # bands of a call, photons once for a spectral pass (render.rs)
+    per_pass = photons_traced(settings) * settings["passes"]
+
+    def group_work(g: list[int]) -> int:
+        return per_pass * (1 if spectral else len(g)) + w * h * len(g)
+
+    work = max(1, sum(group_work(g) for g in groups))
+    ticks = nb * TICKS
     t_load = time.perf_counter() - t0
     keys = [0 if correlated_bands else int(round(wl)) for wl in band_list]
-    warnings = spectral_warnings(sc, band_list) if photon_bands < nb else []
-    with bar(ticks, f"render {len(band_list)} band(s)", progress) as cb:
+    warnings = spectral_warnings(sc, band_list) if spectral else []
+    settings_json = json.dumps({**settings, "band": 0})
+    cubes, per_band = [], []
+    with bar(ticks, f"render {nb} band(s)", progress) as cb:
+        before = 0
+        for g in groups:
 
-        def tick(done: int) -> None:
-            cb(min(ticks, int(ticks * done / work)))
+            def tick(done: int, before: int = before) -> None:
+                cb(min(ticks, int(ticks * (before + done) / work)))
 
-        cube, per_band = render_bands(sc.bands_json(band_list, res),
-                                      json.dumps({**settings, "band": 0}), keys,
-                                      tick if cb is not None else None)
+            cube, stats_g = render_bands(sc.bands_json([band_list[b] for b in g], res),
+                                         settings_json, [keys[b] for b in g],
+                                         tick if cb is not None else None)
+            cubes.append(np.asarray(cube, dtype=np.float32))
+            per_band += list(stats_g)
+            before += group_work(g)
         if cb is not None:
             cb(ticks)
+    cube = np.concatenate(cubes) if len(cubes) > 1 else cubes[0]
     cube = np.asarray(cube, dtype=np.float32)
     if cube.shape != (len(band_list), h, w):
         raise RuntimeError(f"render_bands returned a cube of shape {cube.shape}, "

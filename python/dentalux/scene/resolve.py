@@ -269,6 +269,11 @@ class Scene:
                          "data": [float(x) for x in np.clip(grey, 0, 1).ravel()]}
         return out
 
+    def texels(self) -> int:
+        """Pixels of all image textures (band independent, but part of every band's
+        surfaces in the contract scene)."""
+        return sum(int(img["width"]) * int(img["height"]) for img in self._images.values())
+
     def _boundary(self, b: dict) -> dict:
         if b["kind"] == "opaque":
             return {"kind": "opaque", "surface": self.surface_names.index(b["surface"])}
