@@ -83,13 +83,13 @@ def rust_graph(src: Path):
     for m, f in mods.items():
         text = "\n".join(line.split("//")[0] for line in f.read_text().splitlines())
         here = m.split("::") if m else []
-        is_dir = f.name in ("mod.rs", "lib.rs")
         for path in re.findall(r"\b((?:crate|super|self)(?:::\w+)+)", text):
             parts = path.split("::")
             if parts[0] == "crate":
                 parts = parts[1:]
             else:
-                base = here if is_dir else here[:-1]
+                # `self` is this module (a file's or a folder's), `super` its parent
+                base = here
                 while parts and parts[0] in ("super", "self"):
                     if parts[0] == "super":
                         base = base[:-1]
@@ -134,3 +134,9 @@ def test_a_circle_is_found(tmp_path):
     (src / "x" / "z.rs").write_text("use crate::y::Y;\n")
     (src / "y.rs").write_text("use crate::x::z::f;\n")
     assert cycles(rust_graph(src)) == [["x::z", "y", "x::z"]]
+    # `super::` from a file module names a sibling: x::z and x::w use each other
+    (src / "y.rs").write_text("")
+    (src / "x" / "mod.rs").write_text("pub mod w;\npub mod z;\n")
+    (src / "x" / "z.rs").write_text("use super::w::W;\n")
+    (src / "x" / "w.rs").write_text("use super::z::Z;\n")
+    assert cycles(rust_graph(src)) == [["x::w", "x::z", "x::w"]]

@@ -125,6 +125,20 @@ impl Light {
         })
     }
 
+    /// Whether `other` is the same light in the same place, whatever it emits (the bands of
+    /// one scene differ only in their lights' radiance or intensity).
+    pub fn same_place(&self, other: &Light) -> bool {
+        let mut a = *self;
+        let mut b = *other;
+        for l in [&mut a, &mut b] {
+            match l {
+                Light::Quad { radiance, .. } | Light::Disc { radiance, .. } => *radiance = 0.0,
+                Light::Point { intensity, .. } | Light::Spot { intensity, .. } => *intensity = 0.0,
+            }
+        }
+        a == b
+    }
+
     /// Check sizes and emission; `field` prefixes errors (e.g. `lights[0]`).
     pub fn validate(&self, field: &str) -> Result<()> {
         let nonneg = |k: &str, v: f64, unit: &str| {

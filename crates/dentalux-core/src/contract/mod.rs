@@ -370,17 +370,18 @@ pub fn band_scenes_from_json(text: &str) -> R<Vec<Scene>> {
             o.key("bands")
         ));
     }
-    let mut parts = Vec::with_capacity(bands.len());
+    let mut parts: Vec<(Vec<Medium>, Vec<Surface>, Vec<Light>)> = Vec::with_capacity(bands.len());
     for (v, p) in &bands {
         let mut b = Node { v, path: p }.obj()?;
         let band = (media_of(&mut b)?, surfaces_of(&mut b)?, lights_of(&mut b)?);
         b.done()?;
-        if let Some((m0, s0, _)) = parts.first() {
-            let (m0, s0): (&Vec<Medium>, &Vec<Surface>) = (m0, s0);
-            for (what, n, n0) in [
+        if let Some((m0, s0, l0)) = parts.first() {
+            let counts = [
                 ("media", band.0.len(), m0.len()),
                 ("surfaces", band.1.len(), s0.len()),
-            ] {
+                ("lights", band.2.len(), l0.len()),
+            ];
+            for (what, n, n0) in counts {
                 if n != n0 {
                     return bad(format!(
                         "{p}.{what} has {n} entries and bands[0].{what} has {n0}: every band lists the same {what}"
@@ -395,15 +396,18 @@ pub fn band_scenes_from_json(text: &str) -> R<Vec<Scene>> {
     let ambient = ambient_of(&mut o, media.len())?;
     let shapes = shapes_of(&mut o, surfaces.len(), media.len())?;
     o.done()?;
-    let first = Scene::new(cam, media, surfaces, shapes, lights, ambient)?;
+    let in_band = |i: usize| {
+        move |e: Error| match e {
+            Error::InvalidInput(m) => Error::InvalidInput(format!("bands[{i}]: {m}")),
+            other => other,
+        }
+    };
+    let first = Scene::new(cam, media, surfaces, shapes, lights, ambient).map_err(in_band(0))?;
     let mut scenes = Vec::with_capacity(bands.len());
     for (i, (media, surfaces, lights)) in parts.enumerate() {
         let scene = first
             .with_band(media, surfaces, lights)
-            .map_err(|e| match e {
-                Error::InvalidInput(m) => Error::InvalidInput(format!("bands[{}]: {m}", i + 1)),
-                other => other,
-            })?;
+            .map_err(in_band(i + 1))?;
         scenes.push(scene);
     }
     scenes.insert(0, first);

@@ -402,7 +402,15 @@ fn bad_band_scenes_name_the_band() {
         ),
         (
             |s| s["bands"][1]["lights"] = json!([]),
-            "bands[1]: lights is empty",
+            "bands[1].lights has 0 entries and bands[0].lights has 1: every band lists the same lights",
+        ),
+        (
+            |s| s["bands"][0]["lights"][0]["radiance"] = json!(0.0),
+            "bands[0]: lights: total power is 0",
+        ),
+        (
+            |s| s["bands"][2]["surfaces"][0]["a"] = json!(1.5),
+            "bands[2].surfaces[0].a",
         ),
         (
             |s| s["bands"][0]["shapes"] = json!([]),

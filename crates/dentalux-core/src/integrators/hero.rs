@@ -20,7 +20,7 @@
 //! All bands' maps then hold photons at the same places, so their density estimates share
 //! their noise: it shows as grain in lightness instead of coloured blotches.
 
-use super::photon_trace::Ledger;
+use super::ledger::Ledger;
 use crate::scene::Scene;
 
 /// The band-dependent part of one photon walk's density, per band, relative to the hero.
@@ -36,11 +36,12 @@ pub struct HeroWalk {
     saved: Vec<f64>,
 }
 
-/// ln(x / y), −∞ when x is 0 (band j cannot do what the hero did).
+/// ln x − ln y, −∞ when x is 0 (band j cannot do what the hero did); as a difference of
+/// logarithms, so a subnormal y cannot overflow x / y.
 #[inline]
 fn log_ratio(x: f64, y: f64) -> f64 {
     if x > 0.0 {
-        (x / y).ln()
+        x.ln() - y.ln()
     } else {
         f64::NEG_INFINITY
     }

@@ -2,8 +2,9 @@
 //!
 //! - [`slab`]: layered slab lit by a beam or diffuse light; what a spectrophotometer with
 //!   an integrating sphere measures (total transmittance, reflectance, absorption).
-//! - [`photon_trace`]: the photon pass (eqs. 1–10) filling volume and surface photon maps;
-//!   [`aim`] sends part of the volume pass straight at the media.
+//! - [`photon_trace`]: the photon pass (eqs. 1–10) filling volume and surface photon maps,
+//!   its energy [`ledger`]; [`aim`] sends part of the volume pass straight at the media;
+//!   [`hero`] weighs a spectral pass's walks between its bands.
 //! - [`vpm`]: volume photon mapping's camera pass (eqs. 11–13), modes `vpm` and `vpm-full`.
 //! - [`ppm`]: probabilistic progressive photon mapping (bounded memory, consistent).
 //! - [`volpath`]: the unbiased volumetric path tracer that judges them; [`planar_nee`] lets
@@ -15,12 +16,14 @@
 //!   [`tiles`]: the tile loop every camera pass shares; [`render`]: the dispatch on
 //!   `settings.integrator`.
 //!
-//! Layering (no module uses one above it): `settings`, `transport`, `tiles` → `direct`,
-//! `photon_trace`, `aim`, `planar_nee` → `path`, `pm`, `vpm`, `volpath` → `ppm` → `render`.
+//! Layering (no module uses one above it): `settings`, `transport`, `tiles`, `ledger` →
+//! `hero` → `direct`, `photon_trace`, `aim`, `planar_nee` → `path`, `pm`, `vpm`, `volpath` →
+//! `ppm` → `render` (tests/test_import_graph.py checks that the graph has no circle).
 
 pub mod aim;
 pub mod direct;
 pub mod hero;
+pub mod ledger;
 pub mod path;
 pub mod photon_trace;
 pub mod planar_nee;

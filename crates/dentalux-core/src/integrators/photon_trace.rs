@@ -22,6 +22,7 @@ use crate::error::{Error, Result};
 use crate::geometry::Ray;
 use crate::integrators::aim::Aim;
 use crate::integrators::hero::HeroWalk;
+pub use crate::integrators::ledger::Ledger;
 use crate::integrators::transport::{cross, spawn};
 use crate::math::Frame;
 use crate::photon_map::{Photon, PhotonMap};
@@ -61,66 +62,6 @@ impl Targets {
         volume: true,
         surface: true,
     };
-}
-
-/// Where the emitted power went (sums of photon powers, same units as light power Φ).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Ledger {
-    /// Power emitted by the lights (Σ over photons).
-    pub emitted: f64,
-    /// Power absorbed inside each medium (albedo roulette), indexed like `scene.media`.
-    pub absorbed_medium: Vec<f64>,
-    /// Power absorbed by opaque surfaces.
-    pub absorbed_surface: f64,
-    /// Power that left the scene.
-    pub escaped: f64,
-    /// Power of photons dropped by the event guard.
-    pub cut: f64,
-    /// Power stored in each volume map (counted once per stored event).
-    pub stored_volume: Vec<f64>,
-    /// Power stored in the surface map.
-    pub stored_surface: f64,
-}
-
-impl Ledger {
-    fn new(media: usize) -> Self {
-        Self {
-            absorbed_medium: vec![0.0; media],
-            stored_volume: vec![0.0; media],
-            ..Self::default()
-        }
-    }
-    fn scale(&mut self, f: f64) {
-        for v in [
-            &mut self.emitted,
-            &mut self.absorbed_surface,
-            &mut self.escaped,
-            &mut self.cut,
-            &mut self.stored_surface,
-        ] {
-            *v *= f;
-        }
-        for v in self
-            .absorbed_medium
-            .iter_mut()
-            .chain(&mut self.stored_volume)
-        {
-            *v *= f;
-        }
-    }
-    fn add(&mut self, o: &Ledger) {
-        self.emitted += o.emitted;
-        self.absorbed_surface += o.absorbed_surface;
-        self.escaped += o.escaped;
-        self.cut += o.cut;
-        self.stored_surface += o.stored_surface;
-        for (a, b) in self.absorbed_medium.iter_mut().zip(&o.absorbed_medium) {
-            *a += b;
-        }
-        for (a, b) in self.stored_volume.iter_mut().zip(&o.stored_volume) {
-            *a += b;
-        }
-    }
 }
 
 /// The photon maps of one band.
@@ -481,10 +422,11 @@ fn too_many_photons(photons: usize) -> Error {
     ))
 }
 
-/// Make room for `extra` more band powers in `v`, or fail with [`too_many_photons`].
-fn grow_powers(v: &mut Vec<f32>, extra: usize) -> Result<()> {
+/// Make room for `extra` more band powers (`bands` per photon) in `v`, or fail with
+/// [`too_many_photons`].
+fn grow_powers(v: &mut Vec<f32>, extra: usize, bands: usize) -> Result<()> {
     v.try_reserve(extra)
-        .map_err(|_| too_many_photons(v.len().saturating_add(extra) / 5))
+        .map_err(|_| too_many_photons(v.len().saturating_add(extra) / bands))
 }
 
 /// Make room for `extra` more photons in `v`, or fail with [`too_many_photons`].
@@ -599,10 +541,10 @@ pub fn trace_emission_bands(
             ledger.add(&o.ledger);
             if let Some(ob) = o.bands {
                 for (v, ov) in powers.volume.iter_mut().zip(ob.volume) {
-                    grow_powers(v, ov.len())?;
+                    grow_powers(v, ov.len(), nb)?;
                     v.extend_from_slice(&ov);
                 }
-                grow_powers(&mut powers.surface, ob.surface.len())?;
+                grow_powers(&mut powers.surface, ob.surface.len(), nb)?;
                 powers.surface.extend_from_slice(&ob.surface);
                 for (l, ol) in powers.ledgers.iter_mut().zip(&ob.ledgers) {
                     l.add(ol);

@@ -103,8 +103,18 @@ fn render_spectral(
             ..*settings
         },
     )?;
-    for scene in &scenes[1..] {
+    for (b, scene) in scenes.iter().enumerate().skip(1) {
         effective(scene, &first)?;
+        // a walk starts on the hero's light: every band must have it where the hero has it
+        for (i, (l, l0)) in scene.lights.iter().zip(&scenes[0].lights).enumerate() {
+            if !l.same_place(l0) {
+                return Err(Error::InvalidInput(format!(
+                    "bands[{b}].lights[{i}] is not the light bands[0].lights[{i}] is, only \
+                     brighter or dimmer: a spectral photon pass (settings.spectral_photons) \
+                     needs every band's lights in the same places"
+                )));
+            }
+        }
     }
     let full = first.integrator == Integrator::VpmFull;
     let all = trace_camera_maps_bands(scenes, &first, super::vpm::store_mode(full), 0, control)?;
