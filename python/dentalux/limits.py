@@ -212,7 +212,7 @@ def render_memory_bytes(width: int, height: int, bands: int, settings: dict) -> 
     colour images per pixel, and the photon maps: at least one stored photon per photon
     emitted (the volume maps hold ``volume_stored`` where that budget is set), for one band
     at a time, or for every band at once with ``spectral_photons`` (their maps are built
-    together, with each photon's power in every band while they are traced)."""
+    together from the shared photons, which carry a power per band until then)."""
     pixels = float(width) * float(height)
     need = pixels * (bands * PIXEL_BAND_BYTES + PIXEL_COLOUR_BYTES)
     integrator = settings.get("integrator")
@@ -223,7 +223,8 @@ def render_memory_bytes(width: int, height: int, bands: int, settings: dict) -> 
             photons += float(stored)
         maps = 1.0
         if settings.get("spectral_photons") and bands > 1:
-            maps = bands + bands * 4.0 / PHOTON_BYTES
+            # every band's map, and the shared photons with their B powers while they build
+            maps = bands + 1 + bands * 4.0 / PHOTON_BYTES
         need += photons * PHOTON_BYTES * 1.05 * maps
     return need
 

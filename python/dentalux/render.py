@@ -181,7 +181,8 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     # unless a spectral pass needs them all at once, which the memory check then counts.
     texels = sc.texels()
     if texels and spectral:
-        limits.check_memory(texels * limits.TEXEL_BYTES * nb,
+        limits.check_memory(limits.render_memory_bytes(w, h, nb, settings)
+                            + texels * limits.TEXEL_BYTES * nb,
                             f"spectral_photons with {nb} bands of {texels:,} texture pixels")
     groups = [list(range(nb))] if spectral or not texels else [[b] for b in range(nb)]
     # The core's progress(done) counts photons traced plus pixels finished, summed over the
@@ -237,6 +238,7 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     for key in ("photons_emitted", "photons_stored", "surface_photons", "volume_photons"):
         vals = [s[key] for s in per_band if isinstance(s.get(key), Real)]
         if vals:
-            stats[f"{key}_total"] = sum(vals)
+            # a spectral pass's bands share their photons: they were traced and stored once
+            stats[f"{key}_total"] = vals[0] if spectral else sum(vals)
     return RenderResult(radiance=radiance, bands=band_list, stats=stats, scene_hash=sc.hash,
                         settings=settings)
