@@ -204,3 +204,17 @@ def test_bands_of_textured_scenes_go_one_call_each(monkeypatch):
             image, _ = _core.render_band(sc.to_json(wl, (8, 6)),
                                          json.dumps({**settings, "band": int(wl)}))
             assert np.array_equal(res.radiance[..., b], image)
+
+
+def test_a_band_error_names_the_wavelength():
+    """The core names a bad band by its index in the call (bands[i]); dentalux.render
+    names it by its wavelength."""
+    import dentalux
+    from dentalux.scene.builtin import cornell_box
+
+    d = cornell_box(resolution=(8, 6))
+    d["lights"][0]["spectrum"] = {"wavelengths_nm": [400.0, 500.0, 700.0],
+                                  "values": [0.0, 0.0, 1.0]}
+    with pytest.raises(ValueError, match=r"^at 450 nm: lights: total power is 0"):
+        dentalux.render(d, bands=[605, 450], integrator="pm", spp=1, photons=100,
+                        progress=False)

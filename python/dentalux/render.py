@@ -16,6 +16,7 @@ from __future__ import annotations
 import difflib
 import json
 import os
+import re
 import time
 from dataclasses import dataclass, field
 from numbers import Integral, Real
@@ -81,6 +82,15 @@ def spectral_warnings(sc: Scene, bands) -> list[str]:
                        "of it are not shared: each band keeps about 1/bands of those photons "
                        "and its colour is noisier than band-by-band passes")
     return out
+
+
+def name_the_band(message: str, bands: list[float]) -> str:
+    """A core error about ``bands[i]`` of a render_bands call, with the band named by its
+    wavelength (the user never saw the call's band indices)."""
+    m = re.match(r"bands\[(\d+)\](?:\.|: )(.*)", message, re.S)
+    if m is None or int(m.group(1)) >= len(bands):
+        return message
+    return f"at {bands[int(m.group(1))]:g} nm: {m.group(2)}"
 
 
 def core_render_bands():
@@ -206,9 +216,12 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
             def tick(done: int, before: int = before) -> None:
                 cb(min(ticks, int(ticks * (before + done) / work)))
 
-            cube, stats_g = render_bands(sc.bands_json([band_list[b] for b in g], res),
-                                         settings_json, [keys[b] for b in g],
-                                         tick if cb is not None else None)
+            try:
+                cube, stats_g = render_bands(sc.bands_json([band_list[b] for b in g], res),
+                                             settings_json, [keys[b] for b in g],
+                                             tick if cb is not None else None)
+            except ValueError as exc:
+                raise ValueError(name_the_band(str(exc), [band_list[b] for b in g])) from None
             cubes.append(np.asarray(cube, dtype=np.float32))
             per_band += list(stats_g)
             before += group_work(g)
