@@ -130,12 +130,24 @@ def test_kernel_clip_reaches_the_core():
     assert images[1].mean() == pytest.approx(images[0].mean(), rel=0.05)
 
 
+def assert_band_by_band(sc, res, opts: dict, resolution, correlated: bool = False):
+    """Each band of the RenderResult ``res`` equals the one-band ``render_band`` call with
+    the band's own scene JSON and random-stream key."""
+    from dentalux.render import build_settings
+
+    settings = build_settings(sc, **opts)
+    for b, wl in enumerate(res.bands):
+        key = 0 if correlated else int(wl)
+        image, _ = _core.render_band(sc.to_json(wl, resolution),
+                                     json.dumps({**settings, "band": key}))
+        assert np.array_equal(res.radiance[..., b], image), (correlated, wl)
+
+
 def test_render_bands_equals_a_render_band_per_band():
     """``dentalux.render`` sends every band in one ``render_bands`` call (the shapes decoded
     and their BVH built once); each band is bit-identical to the one-band call with the
     band's own scene JSON and key, for uncorrelated and correlated bands."""
     import dentalux
-    from dentalux.render import build_settings
     from dentalux.scene import scene_from_dict
     from dentalux.scene.builtin import discs
 
@@ -145,12 +157,7 @@ def test_render_bands_equals_a_render_band_per_band():
     for correlated in (False, True):
         res = dentalux.render(sc, bands=bands, correlated_bands=correlated, progress=False,
                               **opts)
-        settings = build_settings(sc, **opts)
-        for b, wl in enumerate(bands):
-            key = 0 if correlated else int(wl)
-            image, _ = _core.render_band(sc.to_json(wl, (16, 12)),
-                                         json.dumps({**settings, "band": key}))
-            assert np.array_equal(res.radiance[..., b], image), (correlated, wl)
+        assert_band_by_band(sc, res, opts, (16, 12), correlated)
         assert [s["wavelength_nm"] for s in res.stats["bands"]] == bands
 
 
@@ -177,7 +184,6 @@ def test_bands_of_textured_scenes_go_one_call_each(monkeypatch):
     (one copy of the pixels at a time), others all bands in one; the images are the same
     as one render_band per band either way."""
     import dentalux
-    from dentalux.render import build_settings
     from dentalux.scene import scene_from_dict
     from dentalux.scene.builtin import cornell_box
 
@@ -199,11 +205,7 @@ def test_bands_of_textured_scenes_go_one_call_each(monkeypatch):
         sc = scene_from_dict(d)
         res = dentalux.render(sc, bands=bands, progress=False, **opts)
         assert calls == expect
-        settings = build_settings(sc, **opts)
-        for b, wl in enumerate(bands):
-            image, _ = _core.render_band(sc.to_json(wl, (8, 6)),
-                                         json.dumps({**settings, "band": int(wl)}))
-            assert np.array_equal(res.radiance[..., b], image)
+        assert_band_by_band(sc, res, opts, (8, 6))
 
 
 def test_a_band_error_names_the_wavelength():

@@ -94,3 +94,8 @@ def test_memory_counts_every_band_maps():
     three = limits.render_memory_bytes(64, 48, 3, dict(s, spectral_photons=True))
     maps = 11_000_000 * limits.PHOTON_BYTES * 1.05
     assert three - one == pytest.approx(maps * (3 + 3 * 4 / limits.PHOTON_BYTES), rel=1e-9)
+    # a spectral pass holds every band's copy of the textures; band by band holds one
+    on = dict(s, spectral_photons=True)
+    textured = limits.render_memory_bytes(64, 48, 3, on, texels=1000)
+    assert textured - three == pytest.approx(1000 * limits.TEXEL_BYTES * 3, rel=1e-9)
+    assert limits.render_memory_bytes(64, 48, 3, s, texels=1000) == one

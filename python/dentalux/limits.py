@@ -207,12 +207,15 @@ def check_slab(n_photons, threads=None, radial_bins: int | None = None,
     return n
 
 
-def render_memory_bytes(width: int, height: int, bands: int, settings: dict) -> float:
+def render_memory_bytes(width: int, height: int, bands: int, settings: dict,
+                        texels: int = 0) -> float:
     """A render's largest allocations: the film and radiance cube per pixel and band, the
     colour images per pixel, and the photon maps: at least one stored photon per photon
     emitted (the volume maps hold ``volume_stored`` where that budget is set), for one band
     at a time, or for every band at once with ``spectral_photons`` (their maps are built
-    together from the shared photons, which carry a power per band until then)."""
+    together from the shared photons, which carry a power per band until then). A spectral
+    pass also holds every band's copy of the scene's ``texels`` image-texture pixels (a
+    band-by-band render holds one, which :func:`check_texture` counted at load)."""
     pixels = float(width) * float(height)
     need = pixels * (bands * PIXEL_BAND_BYTES + PIXEL_COLOUR_BYTES)
     integrator = settings.get("integrator")
@@ -226,12 +229,15 @@ def render_memory_bytes(width: int, height: int, bands: int, settings: dict) -> 
             # every band's map, and the shared photons with their B powers while they build
             maps = bands + 1 + bands * 4.0 / PHOTON_BYTES
         need += photons * PHOTON_BYTES * 1.05 * maps
+    if settings.get("spectral_photons") and bands > 1:
+        need += float(texels) * TEXEL_BYTES * bands
     return need
 
 
-def check_render(settings: dict, width: int, height: int, bands: int) -> None:
+def check_render(settings: dict, width: int, height: int, bands: int, texels: int = 0) -> None:
     """Ceilings on a render's counts and its memory, before the core starts (``settings``
-    as validated by :func:`dentalux.scene.schema.validate_settings`)."""
+    as validated by :func:`dentalux.scene.schema.validate_settings`; ``texels``: the
+    scene's image-texture pixels)."""
     check_threads(settings.get("threads"))
     for key in ("photons", "volume_photons", "volume_stored"):
         if settings.get(key) is not None:
@@ -241,10 +247,11 @@ def check_render(settings: dict, width: int, height: int, bands: int) -> None:
     if width * height > MAX_PIXELS:
         raise ValueError(f"resolution = {width}x{height}: {width * height:,} pixels is out of "
                          f"range: allowed at most {MAX_PIXELS:,} pixels")
-    check_memory(render_memory_bytes(width, height, bands, settings),
+    textures = f", {texels:,} texture pixels" if texels else ""
+    check_memory(render_memory_bytes(width, height, bands, settings, texels),
                  f"resolution = {width}x{height}, {bands} band(s), photons = "
                  f"{settings.get('photons')}, volume_photons = {settings.get('volume_photons')}"
-                 f", volume_stored = {settings.get('volume_stored')}")
+                 f", volume_stored = {settings.get('volume_stored')}{textures}")
 
 
 def check_grid(shape, spacing: float, name: str = "resolution") -> None:

@@ -183,17 +183,13 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     res = _resolution(resolution) or sc.resolution
     render_bands = core_render_bands()
     w, h = res
-    limits.check_render(settings, w, h, len(band_list))
     nb = len(band_list)
     spectral = bool(settings.get("spectral_photons")) and nb > 1
     # Bands go to the core together, except in scenes with image textures: every band's
     # surfaces carry a texture's pixels, so those bands go one at a time (one copy in memory)
     # unless a spectral pass needs them all at once, which the memory check then counts.
     texels = sc.texels()
-    if texels and spectral:
-        limits.check_memory(limits.render_memory_bytes(w, h, nb, settings)
-                            + texels * limits.TEXEL_BYTES * nb,
-                            f"spectral_photons with {nb} bands of {texels:,} texture pixels")
+    limits.check_render(settings, w, h, nb, texels)
     groups = [list(range(nb))] if spectral or not texels else [[b] for b in range(nb)]
     # The core's progress(done) counts photons traced plus pixels finished, summed over the
     # bands of a call, photons once for a spectral pass (render.rs)
@@ -228,7 +224,6 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
         if cb is not None:
             cb(ticks)
     cube = np.concatenate(cubes) if len(cubes) > 1 else cubes[0]
-    cube = np.asarray(cube, dtype=np.float32)
     if cube.shape != (len(band_list), h, w):
         raise RuntimeError(f"render_bands returned a cube of shape {cube.shape}, "
                            f"expected {(len(band_list), h, w)}")

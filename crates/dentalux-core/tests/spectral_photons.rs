@@ -111,12 +111,16 @@ fn infinite_medium_ledger_per_band() {
     assert!(r.iter().all(|m| m.volume[0].len() == r[0].volume[0].len()));
 }
 
-/// A scattering sphere whose refractive index differs per band (1.5 / 1.4 / 1.6; walks
-/// refracted in one band cannot be drawn in another) in front of a grey wall: each band's
-/// ledger balances (emitted = absorbed + escaped + cut, within 4 SE over seeds), and its
-/// stored power agrees with band-by-band analog passes within 4 SE.
-#[test]
-fn refraction_with_band_dependent_index() {
+/// A sphere of radius 2 mm at the origin filled with `media(n)[1]` (a dielectric in air)
+/// before an opaque wall (`surfaces[0]`) in the plane y = `wall_y`, lit by `light`: one
+/// scene per index in `indices`, sharing their geometry.
+fn sphere_before_wall(
+    wall_y: f64,
+    light: Light,
+    surfaces: &[Surface],
+    indices: &[f64],
+    media: impl Fn(f64) -> Vec<Medium>,
+) -> Vec<Scene> {
     let sphere = shape(
         Geometry::Sphere(Sphere {
             center: Vec3::ZERO,
@@ -129,31 +133,44 @@ fn refraction_with_band_dependent_index() {
     );
     let wall = shape(
         Geometry::Quad(Quad {
-            corner: Vec3::new(-20.0, 5.0, -20.0),
+            corner: Vec3::new(-20.0, wall_y, -20.0),
             u: Vec3::new(40.0, 0.0, 0.0),
             v: Vec3::new(0.0, 0.0, 40.0),
         }),
         Boundary::Opaque { surface: 0 },
     );
-    let light = Light::Point {
-        position: Vec3::new(0.0, -6.0, 1.0),
-        intensity: 1.0,
-    };
-    let grey = vec![Surface::Lambertian { reflectance: 0.4 }];
-    let band = |n: f64| vec![air(), medium(0.3, 2.0, 0.5, n)];
     let first = Scene::new(
-        camera(Vec3::new(0.0, -10.0, 0.0), Vec3::ZERO, 4, 4),
-        band(1.5),
-        grey.clone(),
+        camera(Vec3::new(0.0, -10.0, 5.0), Vec3::ZERO, 4, 4),
+        media(indices[0]),
+        surfaces.to_vec(),
         vec![sphere, wall],
         vec![light],
         0,
     )
     .unwrap();
-    let indices = [1.5, 1.4, 1.6];
-    let scenes: Vec<Scene> = (indices.iter())
-        .map(|&n| first.with_band(band(n), grey.clone(), vec![light]).unwrap())
-        .collect();
+    (indices.iter())
+        .map(|&n| {
+            first
+                .with_band(media(n), surfaces.to_vec(), vec![light])
+                .unwrap()
+        })
+        .collect()
+}
+
+/// A scattering sphere whose refractive index differs per band (1.5 / 1.4 / 1.6; walks
+/// refracted in one band cannot be drawn in another) in front of a grey wall: each band's
+/// ledger balances (emitted = absorbed + escaped + cut, within 4 SE over seeds), and its
+/// stored power agrees with band-by-band analog passes within 4 SE.
+#[test]
+fn refraction_with_band_dependent_index() {
+    let light = Light::Point {
+        position: Vec3::new(0.0, -6.0, 1.0),
+        intensity: 1.0,
+    };
+    let grey = vec![Surface::Lambertian { reflectance: 0.4 }];
+    let scenes = sphere_before_wall(5.0, light, &grey, &[1.5, 1.4, 1.6], |n| {
+        vec![air(), medium(0.3, 2.0, 0.5, n)]
+    });
     let runs = passes(&scenes, 20_000, StoreMode::Paper, 10);
     for (b, scene) in scenes.iter().enumerate() {
         let balance: Vec<f64> = (runs.iter())
@@ -193,44 +210,10 @@ fn refraction_with_band_dependent_index() {
 /// walks another band's index refracts elsewhere.
 #[test]
 fn ball_lens_focus_per_band() {
-    let ball = shape(
-        Geometry::Sphere(Sphere {
-            center: Vec3::ZERO,
-            radius: 2.0,
-        }),
-        Boundary::Dielectric {
-            inside: 1,
-            outside: 0,
-        },
-    );
-    let wall = shape(
-        Geometry::Quad(Quad {
-            corner: Vec3::new(-20.0, 3.0, -20.0),
-            u: Vec3::new(40.0, 0.0, 0.0),
-            v: Vec3::new(0.0, 0.0, 40.0),
-        }),
-        Boundary::Opaque { surface: 0 },
-    );
     let spot = Light::spot("spot", Vec3::new(0.0, -30.0, 0.0), Vec3::Y, 1.0, 4.0, 0.0).unwrap();
-    let black = vec![Surface::Black];
-    let glass = |n: f64| vec![air(), medium(0.05, 0.0, 0.0, n)];
-    let first = Scene::new(
-        camera(Vec3::new(0.0, -10.0, 5.0), Vec3::ZERO, 4, 4),
-        glass(1.5),
-        black.clone(),
-        vec![ball, wall],
-        vec![spot],
-        0,
-    )
-    .unwrap();
-    let indices = [1.4, 1.5, 1.6];
-    let scenes: Vec<Scene> = (indices.iter())
-        .map(|&n| {
-            first
-                .with_band(glass(n), black.clone(), vec![spot])
-                .unwrap()
-        })
-        .collect();
+    let scenes = sphere_before_wall(3.0, spot, &[Surface::Black], &[1.4, 1.5, 1.6], |n| {
+        vec![air(), medium(0.05, 0.0, 0.0, n)]
+    });
     let focus = Vec3::new(0.0, 3.0, 0.0);
     let near_focus = |m: &PhotonMaps| {
         (m.surface.photons().iter())

@@ -336,13 +336,10 @@ fn trace_batch(
                             mj[c.from as usize].eta != c.eta_i || mj[c.to as usize].eta != c.eta_t
                         };
                         if (0..nb).any(differs) {
-                            match refracted {
-                                None => hw.scale(c.reflectance, |j| other(j).reflectance),
-                                Some(_) => {
-                                    hw.forbid(|j| differs(j) && other(j).refracted != c.refracted)
-                                }
-                            }
-                            if refracted.is_some() {
+                            if refracted.is_none() {
+                                hw.scale(c.reflectance, |j| other(j).reflectance);
+                            } else {
+                                hw.forbid(|j| differs(j) && other(j).refracted != c.refracted);
                                 hw.scale(1.0 - c.reflectance, |j| 1.0 - other(j).reflectance);
                             }
                         }

@@ -120,15 +120,13 @@ fn render_spectral(
     let all = trace_camera_maps_bands(scenes, &first, super::vpm::store_mode(full), 0, control)?;
     let traced = t0.elapsed().as_secs_f64() / scenes.len() as f64;
     let mut out = Vec::with_capacity(scenes.len());
+    // every band's camera pass draws the same random numbers (the first band's key): with
+    // the same photons and the same camera paths the bands' noise is shared
     for (scene, maps) in scenes.iter().zip(all) {
         let t = Instant::now();
-        // every band's camera pass draws the same random numbers (the first band's key):
-        // with the same photons and the same camera paths the bands' noise is shared
-        let s = first;
-        let (image, mut stats) = super::vpm::render_with_maps(scene, &s, control, full, &maps)?;
-        drop(maps);
+        let (image, mut stats) = super::vpm::render_with_maps(scene, &first, control, full, &maps)?;
         stats.seconds_total = traced + t.elapsed().as_secs_f64();
-        stats.spp = s.spp;
+        stats.spp = first.spp;
         stats.extra.push(("spectral_photons".into(), 1.0));
         out.push((image, stats));
     }
