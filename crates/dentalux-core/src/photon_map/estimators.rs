@@ -182,7 +182,10 @@ impl PhotonMap {
         }
         let (mut s0, mut s1) = (0.0, 0.0);
         let skip = skip.map(|i| &self.photons()[i] as *const Photon);
-        self.for_each_within(x, (big_r2 + t * t).sqrt(), |p, _| {
+        // the cut cylinder's bounding box: |z n_i + ρ_i| ≤ t |n_i| + R √(1 − n_i²)
+        let big_r = big_r2.sqrt();
+        let half = [n.x, n.y, n.z].map(|c| t * c.abs() + big_r * (1.0 - c * c).max(0.0).sqrt());
+        self.for_each_within_box(x, (big_r2 + t * t).sqrt(), half, |p, _| {
             let d = p.position() - x;
             let z = d.dot(n);
             if z < a || z > b || d.dot(d) - z * z > big_r2 || skip == Some(p as *const Photon) {
@@ -195,7 +198,7 @@ impl PhotonMap {
         });
         let [v, m1, m2] = planes
             .clip
-            .and_then(|c| c.moments(x, n, a, b, big_r2.sqrt()))
+            .and_then(|c| c.moments(x, n, a, b, big_r))
             .unwrap_or_else(|| prism_moments(PI * big_r2, a, b));
         let det = v * m2 - m1 * m1;
         // radiance is not negative: a fit that extrapolates below 0 (few photons, steep

@@ -108,6 +108,22 @@ fn knn_and_radius_equal_brute_force() {
                 .filter(|p| dist2(&p.pos, &q) <= (r_max * r_max) as f32)
                 .count();
             assert_eq!(count, brute, "radius mismatch at query {qi}");
+            // the box walk visits exactly the sphere's photons inside the box, in the
+            // sphere walk's order (the layer kernel's sums stay bit-identical)
+            let half = [0.2 + 0.1 * (qi % 3) as f64, 1.5, 0.05 * (qi % 5) as f64];
+            let inside = |p: &Photon| (0..3).all(|i| (p.pos[i] - q[i]).abs() as f64 <= half[i]);
+            let (mut sphere, mut boxed) = (Vec::new(), Vec::new());
+            map.for_each_within(x, r_max, |p, _| {
+                if inside(p) {
+                    sphere.push(p.pos)
+                }
+            });
+            map.for_each_within_box(x, r_max, half, |p, _| {
+                if inside(p) {
+                    boxed.push(p.pos)
+                }
+            });
+            assert_eq!(sphere, boxed, "box walk mismatch at query {qi}");
         }
     }
 }

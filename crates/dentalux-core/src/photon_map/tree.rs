@@ -328,19 +328,40 @@ impl PhotonMap {
     }
 
     /// Call `f(photon, distance²)` for every photon within `r` [mm] of `x`.
-    pub fn for_each_within<F: FnMut(&Photon, f32)>(&self, x: Vec3, r: f64, mut f: F) {
+    pub fn for_each_within<F: FnMut(&Photon, f32)>(&self, x: Vec3, r: f64, f: F) {
+        self.for_each_within_box(x, r, [f64::INFINITY; 3], f);
+    }
+
+    /// [`Self::for_each_within`] restricted to the box |p − x|ᵢ ≤ `half[i]` [mm]: subtrees
+    /// and photons outside it are skipped (a flat kernel inside a larger sphere reads only
+    /// the photons near it). The photons both inside the sphere and the box are visited in
+    /// the same order as by [`Self::for_each_within`], so sums over them are bit-identical.
+    pub fn for_each_within_box<F: FnMut(&Photon, f32)>(
+        &self,
+        x: Vec3,
+        r: f64,
+        half: [f64; 3],
+        mut f: F,
+    ) {
         let q = [x.x as f32, x.y as f32, x.z as f32];
         let r2 = (r * r) as f32;
-        // explicit stack of [lo, hi) ranges; depth is log2(n) ≤ 64
-        let mut stack: Vec<(usize, usize)> = Vec::with_capacity(64);
+        // f32 rounding of x and of the photons' positions: widen the box by a hair
+        let h = half.map(|h| (h * (1.0 + 1e-5) + 1e-4) as f32);
+        let outside = |p: &Photon| (0..3).any(|i| (p.pos[i] - q[i]).abs() > h[i]);
+        // explicit stack of [lo, hi) ranges; depth is log2(n) + 1 < 64
+        let mut stack = [(0usize, 0usize); 64];
+        let mut sp = 0;
         if !self.photons.is_empty() {
-            stack.push((0, self.photons.len()));
+            stack[0] = (0, self.photons.len());
+            sp = 1;
         }
-        while let Some((lo, hi)) = stack.pop() {
+        while sp > 0 {
+            sp -= 1;
+            let (lo, hi) = stack[sp];
             if hi - lo <= LEAF {
                 for p in &self.photons[lo..hi] {
                     let d2 = dist2(&p.pos, &q);
-                    if d2 <= r2 {
+                    if d2 <= r2 && !outside(p) {
                         f(p, d2);
                     }
                 }
@@ -349,15 +370,19 @@ impl PhotonMap {
             let mid = (lo + hi) / 2;
             let p = &self.photons[mid];
             let d2 = dist2(&p.pos, &q);
-            if d2 <= r2 {
+            if d2 <= r2 && !outside(p) {
                 f(p, d2);
             }
-            let delta = q[p.axis()] - p.pos[p.axis()];
-            if (delta <= 0.0 || delta * delta <= r2) && lo < mid {
-                stack.push((lo, mid));
+            let axis = p.axis();
+            let delta = q[axis] - p.pos[axis];
+            let reach = delta.abs() <= h[axis] && delta * delta <= r2;
+            if (delta <= 0.0 || reach) && lo < mid {
+                stack[sp] = (lo, mid);
+                sp += 1;
             }
-            if (delta >= 0.0 || delta * delta <= r2) && mid + 1 < hi {
-                stack.push((mid + 1, hi));
+            if (delta >= 0.0 || reach) && mid + 1 < hi {
+                stack[sp] = (mid + 1, hi);
+                sp += 1;
             }
         }
     }
