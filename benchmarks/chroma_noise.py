@@ -8,6 +8,7 @@ speckle. Also prints each render's wall and CPU seconds (user + system of this p
 
     .venv/bin/python benchmarks/chroma_noise.py [--figures fig3,fig4] [--half-mm 2.0]
         [--bands 450,540,605 | --bands 16] [--stored 4000000] [--resolution 320x240]
+        [--k 800] [--radius 0.3] [--passes band,spectral]
 
 ``--bands 16``: 16 bands evenly over 400-700 nm (20 nm apart) instead of the figures' three.
 """
@@ -46,6 +47,11 @@ def main() -> None:
     ap.add_argument("--stored", type=int, default=None,
                     help="volume photons stored per pass (default: the preview figures')")
     ap.add_argument("--resolution", default=None, help="WxH (default: the preview's)")
+    ap.add_argument("--k", type=int, default=None, help="photons per estimate (preview's)")
+    ap.add_argument("--radius", type=float, default=None,
+                    help="largest gathering radius [mm] (default: the preview's)")
+    ap.add_argument("--passes", default="band,spectral",
+                    help="photon passes to compare: band (band by band), spectral")
     a = ap.parse_args()
     q = F.QUALITIES["preview"]
     if a.resolution:
@@ -56,15 +62,18 @@ def main() -> None:
     stored = a.stored or q.volume_photons
     cs = system("D65", "2")
     settings = dict(spp=q.spp, photons=q.photons, volume_photons=F.EMIT_CAP * stored,
-                    volume_stored=stored, aim=F.FIGURE_AIM, k=q.k, radius=q.radius_mm)
+                    volume_stored=stored, aim=F.FIGURE_AIM, k=a.k or q.k,
+                    radius=a.radius or q.radius_mm)
     for fig in a.figures.split(","):
         d = scene_for(fig, q)
         sc = scene_from_dict(d)
         x0, y0, x1, y1 = square_region(d["camera"], [8.0, 0.0, 10.0], a.half_mm, (0, 0, 1))
         print(f"{fig}: patch {x1 - x0}x{y1 - y0} px on the raised disc's top "
               f"({2 * a.half_mm:g} mm square), {q.resolution[0]}x{q.resolution[1]}, "
-              f"{len(bands)} bands, {stored} volume photons stored")
-        for spectral in (False, True):
+              f"{len(bands)} bands, {stored} volume photons stored, k {settings['k']}, "
+              f"radius <= {settings['radius']} mm")
+        passes = {"band": False, "spectral": True}
+        for spectral in (passes[p] for p in a.passes.split(",")):
             c0, t0 = time.process_time(), time.perf_counter()
             res = render(sc, integrator="vpm", bands=bands, seed=1,
                          correlated_bands=True, spectral_photons=spectral, progress=False,

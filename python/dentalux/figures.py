@@ -70,6 +70,8 @@ class Quality:
     # Volume photons stored per band in the teeth scenes (the paper counts its 100 M photons
     # as collected, i.e. stored); `teeth_volume_photons` then caps the photons emitted.
     teeth_volume_stored: int = 0
+    # Photons per volume estimate in the teeth scenes.
+    teeth_k: int = 400
     # Tissue figures (Fig. 4's enamel, Fig. 5, the crown): anisotropy lowered to this g by the
     # similarity relation (μs' kept), as the paper scaled its teeth's anisotropy; None
     # renders the library's g (docs/figures.md).
@@ -77,8 +79,10 @@ class Quality:
 
 
 QUALITIES = {
-    # a few minutes for everything on a 2-core machine (what `make demo` runs)
-    "preview": Quality("preview", (320, 240), 4, 1_000_000, 4_000_000, 0.3, (96, 72), 8192, 800,
+    # a few minutes for everything on a 2-core machine (what `make demo` runs); the discs store
+    # 16 M volume photons with k 200: less colour noise in less time than 4 M with k 800
+    # (benchmarks/chroma_noise.py, docs/figures.md "Photon counts")
+    "preview": Quality("preview", (320, 240), 4, 1_000_000, 16_000_000, 0.3, (96, 72), 8192, 200,
                        0.3, 100_000_000, 1.0, 8, teeth_volume_stored=16_000_000),
     # the paper's photon counts: 100 M volume photons, 1 M global photons
     "paper": Quality("paper", (512, 384), 16, 1_000_000, 100_000_000, 0.15, (192, 144), 16384,
@@ -214,7 +218,7 @@ def cornell_teeth_scene(quality: Quality) -> dict:
 def _teeth_settings(quality: Quality) -> dict:
     return {"volume_photons": quality.teeth_volume_photons, "aim": FIGURE_AIM,
             "volume_stored": quality.teeth_volume_stored, "radius": quality.teeth_radius_mm,
-            "spp": quality.teeth_spp, "k": min(quality.k, 400)}
+            "spp": quality.teeth_spp, "k": quality.teeth_k}
 
 
 def lower_anisotropy(scene: dict, quality: Quality, bands=PAPER_BANDS) -> dict:
