@@ -162,6 +162,65 @@ fn aimed_emission_keeps_the_stored_power() {
     assert!(Aim::new(&scene, 0.0).is_none());
 }
 
+/// Aimed emission splits the photons that reach the medium unaimed (off the floor: power
+/// 1/(1 − w) against an aimed photon's p_light/(w p_cone)) into walks of an aimed photon's
+/// power: the ball's map holds no photon far heavier than the rest, its stored power is the
+/// same as without splitting (within 4 s.e. of independent repetitions), and every walk's
+/// power is booked (the ledger balances).
+#[test]
+fn aimed_emission_splits_heavy_photons() {
+    let scene = small_medium_scene();
+    let aim = Aim::new(&scene, 0.8).expect("the ball is a target");
+    let run = |aim: Aim| {
+        let e = Emission {
+            photons: 50_000,
+            aim: Some(aim),
+            ..Emission::default()
+        };
+        let all = repeat(&scene, &e, VOLUME, 12, 300);
+        let mut ratio: f64 = 0.0;
+        for maps in &all {
+            let l = &maps.ledger;
+            let out =
+                l.absorbed_medium.iter().sum::<f64>() + l.absorbed_surface + l.escaped + l.cut;
+            assert!(
+                (out - l.emitted).abs() < 1e-9 * l.emitted,
+                "{out} vs {}",
+                l.emitted
+            );
+            let v = &maps.volume[1];
+            let mean = v.total_power() / v.len() as f64;
+            let top = v
+                .photons()
+                .iter()
+                .map(|p| p.power as f64)
+                .fold(0.0, f64::max);
+            ratio = ratio.max(top / mean);
+        }
+        let power: Vec<f64> = all.iter().map(|m| m.ledger.stored_volume[1]).collect();
+        (mean_se(&power), ratio)
+    };
+    let ((split, se_s), top_split) = run(aim.clone());
+    let ((whole, se_w), top_whole) = run(aim.without_splitting());
+    let se = (se_s * se_s + se_w * se_w).sqrt();
+    eprintln!(
+        "stored power: split {split:.5} ± {se_s:.5} (heaviest photon {top_split:.2} × the \
+         mean), whole {whole:.5} ± {se_w:.5} (heaviest {top_whole:.2} × the mean)"
+    );
+    assert!(
+        (split - whole).abs() < 4.0 * se,
+        "{split} vs {whole} ± {se}"
+    );
+    assert!(
+        top_whole > 10.0,
+        "unsplit photons should be heavy here: {top_whole}"
+    );
+    assert!(
+        top_split < 3.0,
+        "split photons should weigh alike: {top_split}"
+    );
+}
+
 /// The surface pass aimed the same way: the power its map stores (light on the floor that
 /// came through the ball, or off the floor again) is the light's own emission's, from far
 /// more photons per photon emitted.

@@ -9,6 +9,7 @@
 use dentalux_core::control::Control;
 use dentalux_core::geometry::shapes::{Quad, Sphere};
 use dentalux_core::geometry::Vec3;
+use dentalux_core::integrators::aim::Aim;
 use dentalux_core::integrators::photon_trace::{
     trace_emission_bands, Emission, PhotonMaps, StoreMode, Targets,
 };
@@ -199,6 +200,92 @@ fn refraction_with_band_dependent_index() {
         assert!(
             z.abs() < 4.0,
             "band {b}: stored {ms} ± {ss} vs analog {ma} ± {sa}"
+        );
+    }
+}
+
+/// An aimed spectral pass (80 % of the photons into the sphere's cone) splits the photons
+/// that reach the sphere unaimed, off the wall behind it (about 140 × an aimed photon's
+/// power), into walks of an aimed photon's power; each band's stored power agrees with
+/// band-by-band unaimed passes within 4 SE, and no band's map holds a photon far heavier
+/// than its mean (the balance weights allow up to 3 × between bands).
+#[test]
+fn aimed_spectral_pass_splits_heavy_photons() {
+    let light = Light::Point {
+        position: Vec3::new(0.0, -6.0, 1.0),
+        intensity: 1.0,
+    };
+    let grey = vec![Surface::Lambertian { reflectance: 0.7 }];
+    let sphere_medium = |mus: f64| vec![air(), medium(0.1, mus, 0.5, 1.4)];
+    let first = sphere_before_wall(5.0, light, &grey, &[1.4], |_| sphere_medium(2.0));
+    let scenes: Vec<Scene> = [2.0, 3.0, 1.5]
+        .iter()
+        .map(|&mus| {
+            first[0]
+                .with_band(sphere_medium(mus), grey.clone(), vec![light])
+                .unwrap()
+        })
+        .collect();
+    let aim = Aim::new(&scenes[0], 0.8).expect("the sphere is a target");
+    let run = |aim: &Aim, scenes: &[Scene], seed: u64| {
+        let emission = Emission {
+            photons: 20_000,
+            aim: Some(aim.clone()),
+            ..Emission::default()
+        };
+        let control = Control::new();
+        trace_emission_bands(
+            scenes,
+            &emission,
+            StoreMode::Paper,
+            Targets::BOTH,
+            0,
+            seed,
+            0,
+            &control,
+        )
+        .unwrap()
+    };
+    let heaviest = |maps: &PhotonMaps| {
+        let v = &maps.volume[1];
+        let mean = v.total_power() / v.len() as f64;
+        v.photons()
+            .iter()
+            .map(|p| p.power as f64)
+            .fold(0.0, f64::max)
+            / mean
+    };
+    let split: Vec<Vec<PhotonMaps>> = (1..=10).map(|seed| run(&aim, &scenes, seed)).collect();
+    let whole = run(&aim.clone().without_splitting(), &scenes, 1);
+    for (b, scene) in scenes.iter().enumerate() {
+        let top_split = split.iter().map(|r| heaviest(&r[b])).fold(0.0, f64::max);
+        let top_whole = heaviest(&whole[b]);
+        assert!(
+            top_split < 10.0,
+            "band {b}: heaviest photon {top_split} × the mean"
+        );
+        assert!(
+            top_whole > 30.0,
+            "band {b}: unsplit heaviest {top_whole} × the mean"
+        );
+        let spectral: Vec<f64> = split.iter().map(|r| r[b].ledger.stored_volume[1]).collect();
+        let analog: Vec<f64> = (1..=10)
+            .map(|seed| {
+                let one = std::slice::from_ref(scene);
+                passes_seeded(one, 40_000, StoreMode::Paper, seed)[0]
+                    .ledger
+                    .stored_volume[1]
+            })
+            .collect();
+        let ((ms, ss), (ma, sa)) = (mean_se(&spectral), mean_se(&analog));
+        let z = (ms - ma) / (ss * ss + sa * sa).sqrt();
+        eprintln!(
+            "band {b}: stored {ms:.5} ± {ss:.5} (split; heaviest {top_split:.1} × the mean, \
+             unsplit {top_whole:.0}) vs unaimed {ma:.5} ± {sa:.5}"
+        );
+        assert!(
+            z.abs() < 4.0,
+            "band {b}: stored {ms} ± {ss} vs unaimed {ma} ± {sa}"
         );
     }
 }

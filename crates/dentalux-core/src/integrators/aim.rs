@@ -32,6 +32,8 @@ struct Target {
 pub struct Aim {
     targets: Vec<Target>,
     fraction: f64,
+    /// Split heavy photons where they enter a medium ([`Aim::sample_emission`]).
+    splitting: bool,
 }
 
 /// How a light emits, for the mixture: the origin and the density of its own directions.
@@ -101,7 +103,16 @@ impl Aim {
         (!targets.is_empty()).then(|| Aim {
             targets,
             fraction: fraction.min(0.999),
+            splitting: true,
         })
+    }
+
+    /// The same aim without splitting (every photon one walk; for comparisons).
+    pub fn without_splitting(self) -> Aim {
+        Aim {
+            splitting: false,
+            ..self
+        }
     }
 
     /// Number of target spheres.
@@ -122,22 +133,21 @@ impl Aim {
         Some((to / d, (1.0 - sin2).max(0.0).sqrt()))
     }
 
-    /// An emission ray from `light` and its power (Φ p_light / p_mixture), like
-    /// [`Light::sample_emission`]; `u1` picks the point, `u2` the direction, `u3` the strategy.
-    /// The power is 0 for an aimed direction the light does not emit into.
-    pub fn sample_emission(
-        &self,
-        light: &Light,
-        u1: [f64; 2],
-        u2: [f64; 2],
-        u3: f64,
-    ) -> (Ray, f64) {
+    /// An emission ray from `light`, its power (Φ p_light / p_mixture) and its split count,
+    /// like [`Light::sample_emission`]; `u1` picks the point, `u2` the direction, `u3` the
+    /// strategy. The power is 0 for an aimed direction the light does not emit into.
+    pub fn sample_emission(&self, light: &Light, u1: [f64; 2], u2: [f64; 2], u3: f64) -> Aimed {
         let (o, emitter) = if let Some(a) = light.area_point(u1) {
             (a.point, Emitter::Area { normal: a.normal })
         } else if let Light::Point { position, .. } = *light {
             (position, Emitter::Point)
         } else {
-            return light.sample_emission(u1, u2);
+            let (ray, power) = light.sample_emission(u1, u2);
+            return Aimed {
+                ray,
+                power,
+                split: 1,
+            };
         };
         let w = self.fraction;
         let j_count = self.targets.len();
@@ -154,9 +164,27 @@ impl Aim {
         } else {
             emitter.sample(u2)
         };
+        let (base, pdf) = self.densities(&emitter, o, d);
+        if base <= 0.0 {
+            return Aimed {
+                ray: Ray::new(o, d),
+                power: 0.0,
+                split: 1,
+            };
+        }
+        Aimed {
+            ray: Ray::new(o, d),
+            power: light.power() * base / pdf,
+            split: self.split_count(&emitter, o, base / pdf),
+        }
+    }
+
+    /// The light's own density p_light(d) and the mixture's p(d) of direction `d` from `o`
+    /// (p_light is 0 where the light does not emit; p is then not computed).
+    fn densities(&self, emitter: &Emitter, o: Vec3, d: Vec3) -> (f64, f64) {
         let base = emitter.pdf(d);
         if base <= 0.0 {
-            return (Ray::new(o, d), 0.0);
+            return (0.0, 0.0);
         }
         let aimed: f64 = self
             .targets
@@ -169,10 +197,51 @@ impl Aim {
                 None => base,
             })
             .sum::<f64>()
-            / j_count as f64;
-        let pdf = (1.0 - w) * base + w * aimed;
-        (Ray::new(o, d), light.power() * base / pdf)
+            / self.targets.len() as f64;
+        (base, (1.0 - self.fraction) * base + self.fraction * aimed)
     }
+
+    /// Into how many walks a photon with power factor `f` from `o` is split where it enters
+    /// a scattering medium: f over the factor of a photon sent from `o` along a target's
+    /// cone axis (the largest over the targets the light faces), rounded, in
+    /// [1, [`MAX_SPLIT`]]. A photon outside every cone carries 1/(1 − w), an aimed one
+    /// about p_light/(w p_cone), tens of times less for a small target: the few photons
+    /// that reach a medium without being aimed (off a floor or a wall) would otherwise be
+    /// that much heavier than their neighbours in the map, each a kernel-sized blotch in
+    /// its band. Splitting keeps the expected power (each walk carries 1/m of it).
+    fn split_count(&self, emitter: &Emitter, o: Vec3, f: f64) -> u32 {
+        if !self.splitting {
+            return 1;
+        }
+        let reference = self
+            .targets
+            .iter()
+            .filter_map(|t| Self::cone(o, t))
+            .map(|(axis, _)| match self.densities(emitter, o, axis) {
+                (base, pdf) if base > 0.0 => base / pdf,
+                _ => 0.0,
+            })
+            .fold(0.0, f64::max);
+        if reference <= 0.0 {
+            return 1;
+        }
+        (f / reference).round().clamp(1.0, MAX_SPLIT as f64) as u32
+    }
+}
+
+/// Most walks one photon is split into ([`Aim::sample_emission`]).
+pub const MAX_SPLIT: u32 = 256;
+
+/// An aimed emission: the ray, its power [W] and into how many walks of 1/`split` of that
+/// power it is split where it first enters a scattering medium.
+#[derive(Debug, Clone, Copy)]
+pub struct Aimed {
+    /// The emission ray.
+    pub ray: Ray,
+    /// Φ p_light / p_mixture.
+    pub power: f64,
+    /// Walks to split into (1: none).
+    pub split: u32,
 }
 
 #[cfg(test)]
@@ -195,6 +264,7 @@ mod tests {
                 radius: 1.0,
             }],
             fraction: 0.6,
+            splitting: true,
         };
         let phi = light.power();
         let mut rng = crate::rng::Stream::new(5, 0, 0);
@@ -202,8 +272,8 @@ mod tests {
         let n = 400_000;
         let (mut in_a, mut sq_a, mut in_b, mut total) = (0.0, 0.0, 0.0, 0.0);
         for _ in 0..n {
-            let (ray, p) =
-                aim.sample_emission(&light, rng.uniform2(), rng.uniform2(), rng.uniform());
+            let e = aim.sample_emission(&light, rng.uniform2(), rng.uniform2(), rng.uniform());
+            let (ray, p) = (e.ray, e.power);
             let w = p / phi;
             let hit_target = {
                 let t = aim.targets[0];

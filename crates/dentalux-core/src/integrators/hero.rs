@@ -97,6 +97,13 @@ impl HeroWalk {
         }
     }
 
+    /// Split the walk into `m` walks: every band's power becomes 1/m of it.
+    pub fn split(&mut self, m: u32) {
+        for a in &mut self.analog {
+            *a /= m as f64;
+        }
+    }
+
     /// Band j cannot draw the walk from here on where `impossible(j)`.
     #[inline]
     pub fn forbid(&mut self, impossible: impl Fn(usize) -> bool) {

@@ -20,7 +20,7 @@
 use crate::control::Control;
 use crate::error::{Error, Result};
 use crate::geometry::Ray;
-use crate::integrators::aim::Aim;
+use crate::integrators::aim::{Aim, Aimed};
 use crate::integrators::hero::HeroWalk;
 pub use crate::integrators::ledger::Ledger;
 use crate::integrators::transport::{cross, spawn};
@@ -151,6 +151,7 @@ fn trace_batch(
         }),
     };
     let mut hw = HeroWalk::new(nb);
+    let mut pending: Vec<Pending> = Vec::new();
     let led = &mut out.ledger;
     for _ in 0..count {
         if let Some(stop) = stop_at {
@@ -176,18 +177,29 @@ fn trace_batch(
         let u3 = aim.map(|_| rng.uniform());
         let emit = |s: &Scene| match aim {
             Some(a) => a.sample_emission(&s.lights[li], u1, u2, u3.unwrap_or(0.0)),
-            None => s.lights[li].sample_emission(u1, u2),
+            None => {
+                let (ray, power) = s.lights[li].sample_emission(u1, u2);
+                Aimed {
+                    ray,
+                    power,
+                    split: 1,
+                }
+            }
         };
-        let (mut ray, weight) = emit(scene);
+        let Aimed {
+            mut ray,
+            power: weight,
+            mut split,
+        } = emit(scene);
         // Φ_l / (N · P(l)): every photon carries Φ_total / N for uniform emission
-        let power = weight / (p_light * n_total as f64);
+        let mut power = weight / (p_light * n_total as f64);
         if !(power > 0.0 && power.is_finite()) {
             continue;
         }
         led.emitted += power;
         let bands = out.bands.as_mut();
         if let Some(bp) = bands {
-            hw.start(scenes, li, p_light, n_total, |j| emit(&scenes[j]).1);
+            hw.start(scenes, li, p_light, n_total, |j| emit(&scenes[j]).power);
             hw.book(&mut bp.ledgers, |l| &mut l.emitted);
         }
         let mut medium = scene.ambient_medium;
@@ -195,168 +207,221 @@ fn trace_batch(
         let mut reflected = false; // any reflection at a mismatched boundary so far
         let mut specular = false; // any event at a mismatched boundary so far
         let mut events = 0u32;
-        loop {
-            events += 1;
-            if events > MAX_EVENTS {
-                led.cut += power;
-                if let Some(bp) = out.bands.as_mut() {
-                    hw.book(&mut bp.ledgers, |l| &mut l.cut);
+        // the walks a split photon still owes (`Aimed::split`), traced after this one
+        pending.clear();
+        'walks: loop {
+            loop {
+                events += 1;
+                if events > MAX_EVENTS {
+                    led.cut += power;
+                    if let Some(bp) = out.bands.as_mut() {
+                        hw.book(&mut bp.ledgers, |l| &mut l.cut);
+                    }
+                    break;
                 }
-                break;
-            }
-            let m = &scene.media[medium as usize];
-            let mi = medium as usize;
-            let hit = scene.intersect(&ray, f64::INFINITY);
-            let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
-            let sigma_t = m.sigma_t();
-            let sigma_t_of = |j: usize| scenes[j].media[mi].sigma_t();
-            if sigma_t > 0.0 {
-                // free flight, eq. 2
-                let s = sample_exponential(rng.uniform_open0(), sigma_t);
-                if s < t_hit {
-                    let x = ray.at(s);
-                    if spectral {
-                        // collision density σt e^{−σt s}, relative to the hero's
-                        let ln_density = |st: f64| {
-                            if st > 0.0 {
-                                st.ln() - st * s
-                            } else {
-                                f64::NEG_INFINITY
+                let m = &scene.media[medium as usize];
+                let mi = medium as usize;
+                let hit = scene.intersect(&ray, f64::INFINITY);
+                let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
+                let sigma_t = m.sigma_t();
+                let sigma_t_of = |j: usize| scenes[j].media[mi].sigma_t();
+                if sigma_t > 0.0 {
+                    // free flight, eq. 2
+                    let s = sample_exponential(rng.uniform_open0(), sigma_t);
+                    if s < t_hit {
+                        let x = ray.at(s);
+                        if spectral {
+                            // collision density σt e^{−σt s}, relative to the hero's
+                            let ln_density = |st: f64| {
+                                if st > 0.0 {
+                                    st.ln() - st * s
+                                } else {
+                                    f64::NEG_INFINITY
+                                }
+                            };
+                            hw.scale_ln(ln_density(sigma_t), |j| ln_density(sigma_t_of(j)));
+                        }
+                        // scatter or absorb, eqs. 3–4
+                        if rng.uniform() >= m.albedo() {
+                            led.absorbed_medium[mi] += power;
+                            if let Some(bp) = out.bands.as_mut() {
+                                let absorb = |j: usize| 1.0 - scenes[j].media[mi].albedo();
+                                hw.book_with(&mut bp.ledgers, 1.0 - m.albedo(), absorb, |l| {
+                                    &mut l.absorbed_medium[mi]
+                                });
                             }
-                        };
-                        hw.scale_ln(ln_density(sigma_t), |j| ln_density(sigma_t_of(j)));
-                    }
-                    // scatter or absorb, eqs. 3–4
-                    if rng.uniform() >= m.albedo() {
-                        led.absorbed_medium[mi] += power;
-                        if let Some(bp) = out.bands.as_mut() {
-                            let absorb = |j: usize| 1.0 - scenes[j].media[mi].albedo();
-                            hw.book_with(&mut bp.ledgers, 1.0 - m.albedo(), absorb, |l| {
-                                &mut l.absorbed_medium[mi]
-                            });
+                            break;
                         }
-                        break;
-                    }
-                    if spectral {
-                        hw.scale(m.albedo(), |j| scenes[j].media[mi].albedo());
-                    }
-                    // only scattering events are stored: their density is σs φ, what eq. 11's
-                    // Σ p ΔΦ / V estimates (storing absorptions too would give σt φ, 1/albedo
-                    // too bright)
-                    let single_traced = !scattered && !reflected;
-                    if targets.volume && (mode == StoreMode::All || !single_traced) {
-                        out.volume[mi].push(Photon::new(x, ray.d, power));
-                        led.stored_volume[mi] += power;
-                        if let Some(bp) = out.bands.as_mut() {
-                            bp.volume[mi].extend(hw.powers().iter().map(|&p| p as f32));
-                            hw.book(&mut bp.ledgers, |l| &mut l.stored_volume[mi]);
+                        if spectral {
+                            hw.scale(m.albedo(), |j| scenes[j].media[mi].albedo());
                         }
-                    }
-                    // new direction from the phase function, eqs. 7–10
-                    let d = m.phase.sample(ray.d, rng.uniform2(), rng.uniform());
-                    if spectral {
-                        let cos = ray.d.dot(d);
-                        let phase_of = |j: usize| &scenes[j].media[mi].phase;
-                        if (0..nb).any(|j| *phase_of(j) != m.phase) {
-                            hw.scale(m.phase.eval(cos), |j| phase_of(j).eval(cos));
-                        }
-                    }
-                    ray = Ray { o: x, d };
-                    scattered = true;
-                    continue;
-                }
-            }
-            if spectral {
-                // no collision before the boundary: e^{−σt t}, relative to the hero's
-                if t_hit.is_finite() {
-                    hw.scale_ln(-sigma_t * t_hit, |j| -sigma_t_of(j) * t_hit);
-                } else {
-                    hw.forbid(|j| sigma_t_of(j) > 0.0);
-                }
-            }
-            let Some(hit) = hit else {
-                led.escaped += power;
-                if let Some(bp) = out.bands.as_mut() {
-                    hw.book(&mut bp.ledgers, |l| &mut l.escaped);
-                }
-                break;
-            };
-            match scene.boundary(hit.shape) {
-                Boundary::Opaque { surface } => {
-                    if on_surfaces && (scattered || specular) {
-                        out.surface.push(Photon::new(hit.p, ray.d, power));
-                        led.stored_surface += power;
-                        if let Some(bp) = out.bands.as_mut() {
-                            bp.surface.extend(hw.powers().iter().map(|&p| p as f32));
-                            hw.book(&mut bp.ledgers, |l| &mut l.stored_surface);
-                        }
-                    }
-                    let uv_scale = scene.shapes()[hit.shape as usize].uv_scale;
-                    let si = surface as usize;
-                    let rho = scene.surfaces[si].reflectance(&hit, uv_scale);
-                    let rho_of = |j: usize| scenes[j].surfaces[si].reflectance(&hit, uv_scale);
-                    if rng.uniform() >= rho {
-                        led.absorbed_surface += power;
-                        if let Some(bp) = out.bands.as_mut() {
-                            hw.book_with(
-                                &mut bp.ledgers,
-                                1.0 - rho,
-                                |j| 1.0 - rho_of(j),
-                                |l| &mut l.absorbed_surface,
-                            );
-                        }
-                        break;
-                    }
-                    if spectral {
-                        hw.scale(rho, rho_of);
-                    }
-                    // Lambertian bounce on the side the photon came from
-                    let n = if ray.d.dot(hit.n) < 0.0 {
-                        hit.n
-                    } else {
-                        -hit.n
-                    };
-                    let d = Frame::from_axis(n).to_world(cosine_hemisphere(rng.uniform2()));
-                    ray = spawn(scene, &hit, d);
-                    scattered = true;
-                }
-                Boundary::Dielectric { inside, outside } => {
-                    let c = cross(scene, &hit, ray.d, inside, outside);
-                    let refracted = if rng.uniform() < c.reflectance {
-                        None
-                    } else {
-                        c.refracted
-                    };
-                    if spectral {
-                        // bands of another index: their own Fresnel choice, and a refraction
-                        // that bends elsewhere (a delta direction) is one they cannot draw
-                        let other = |j: usize| cross(&scenes[j], &hit, ray.d, inside, outside);
-                        let differs = |j: usize| {
-                            let mj = &scenes[j].media;
-                            mj[c.from as usize].eta != c.eta_i || mj[c.to as usize].eta != c.eta_t
-                        };
-                        if (0..nb).any(differs) {
-                            if refracted.is_none() {
-                                hw.scale(c.reflectance, |j| other(j).reflectance);
-                            } else {
-                                hw.forbid(|j| differs(j) && other(j).refracted != c.refracted);
-                                hw.scale(1.0 - c.reflectance, |j| 1.0 - other(j).reflectance);
+                        // only scattering events are stored: their density is σs φ, what eq. 11's
+                        // Σ p ΔΦ / V estimates (storing absorptions too would give σt φ, 1/albedo
+                        // too bright)
+                        let single_traced = !scattered && !reflected;
+                        if targets.volume && (mode == StoreMode::All || !single_traced) {
+                            out.volume[mi].push(Photon::new(x, ray.d, power));
+                            led.stored_volume[mi] += power;
+                            if let Some(bp) = out.bands.as_mut() {
+                                bp.volume[mi].extend(hw.powers().iter().map(|&p| p as f32));
+                                hw.book(&mut bp.ledgers, |l| &mut l.stored_volume[mi]);
                             }
                         }
+                        // new direction from the phase function, eqs. 7–10
+                        let d = m.phase.sample(ray.d, rng.uniform2(), rng.uniform());
+                        if spectral {
+                            let cos = ray.d.dot(d);
+                            let phase_of = |j: usize| &scenes[j].media[mi].phase;
+                            if (0..nb).any(|j| *phase_of(j) != m.phase) {
+                                hw.scale(m.phase.eval(cos), |j| phase_of(j).eval(cos));
+                            }
+                        }
+                        ray = Ray { o: x, d };
+                        scattered = true;
+                        continue;
                     }
-                    if let Some(d) = refracted {
+                }
+                if spectral {
+                    // no collision before the boundary: e^{−σt t}, relative to the hero's
+                    if t_hit.is_finite() {
+                        hw.scale_ln(-sigma_t * t_hit, |j| -sigma_t_of(j) * t_hit);
+                    } else {
+                        hw.forbid(|j| sigma_t_of(j) > 0.0);
+                    }
+                }
+                let Some(hit) = hit else {
+                    led.escaped += power;
+                    if let Some(bp) = out.bands.as_mut() {
+                        hw.book(&mut bp.ledgers, |l| &mut l.escaped);
+                    }
+                    break;
+                };
+                match scene.boundary(hit.shape) {
+                    Boundary::Opaque { surface } => {
+                        if on_surfaces && (scattered || specular) {
+                            out.surface.push(Photon::new(hit.p, ray.d, power));
+                            led.stored_surface += power;
+                            if let Some(bp) = out.bands.as_mut() {
+                                bp.surface.extend(hw.powers().iter().map(|&p| p as f32));
+                                hw.book(&mut bp.ledgers, |l| &mut l.stored_surface);
+                            }
+                        }
+                        let uv_scale = scene.shapes()[hit.shape as usize].uv_scale;
+                        let si = surface as usize;
+                        let rho = scene.surfaces[si].reflectance(&hit, uv_scale);
+                        let rho_of = |j: usize| scenes[j].surfaces[si].reflectance(&hit, uv_scale);
+                        if rng.uniform() >= rho {
+                            led.absorbed_surface += power;
+                            if let Some(bp) = out.bands.as_mut() {
+                                hw.book_with(
+                                    &mut bp.ledgers,
+                                    1.0 - rho,
+                                    |j| 1.0 - rho_of(j),
+                                    |l| &mut l.absorbed_surface,
+                                );
+                            }
+                            break;
+                        }
+                        if spectral {
+                            hw.scale(rho, rho_of);
+                        }
+                        // Lambertian bounce on the side the photon came from
+                        let n = if ray.d.dot(hit.n) < 0.0 {
+                            hit.n
+                        } else {
+                            -hit.n
+                        };
+                        let d = Frame::from_axis(n).to_world(cosine_hemisphere(rng.uniform2()));
                         ray = spawn(scene, &hit, d);
-                        medium = c.to;
-                    } else {
-                        ray = spawn(scene, &hit, c.reflected);
-                        reflected |= c.mismatched();
+                        scattered = true;
                     }
-                    specular |= c.mismatched();
+                    Boundary::Dielectric { inside, outside } => {
+                        let c = cross(scene, &hit, ray.d, inside, outside);
+                        let refracted = if rng.uniform() < c.reflectance {
+                            None
+                        } else {
+                            c.refracted
+                        };
+                        if spectral {
+                            // bands of another index: their own Fresnel choice, and a refraction
+                            // that bends elsewhere (a delta direction) is one they cannot draw
+                            let other = |j: usize| cross(&scenes[j], &hit, ray.d, inside, outside);
+                            let differs = |j: usize| {
+                                let mj = &scenes[j].media;
+                                mj[c.from as usize].eta != c.eta_i
+                                    || mj[c.to as usize].eta != c.eta_t
+                            };
+                            if (0..nb).any(differs) {
+                                if refracted.is_none() {
+                                    hw.scale(c.reflectance, |j| other(j).reflectance);
+                                } else {
+                                    hw.forbid(|j| differs(j) && other(j).refracted != c.refracted);
+                                    hw.scale(1.0 - c.reflectance, |j| 1.0 - other(j).reflectance);
+                                }
+                            }
+                        }
+                        if let Some(d) = refracted {
+                            ray = spawn(scene, &hit, d);
+                            medium = c.to;
+                            if split > 1 && scene.media[medium as usize].sigma_s > 0.0 {
+                                // a heavy photon enters a medium: `split` walks from here, each
+                                // with 1/split of its power (the expected power is kept)
+                                power /= split as f64;
+                                if spectral {
+                                    hw.split(split);
+                                }
+                                for _ in 1..split {
+                                    pending.push(Pending {
+                                        ray,
+                                        medium,
+                                        scattered,
+                                        reflected,
+                                        specular,
+                                        events,
+                                        power,
+                                        hero: spectral.then(|| hw.clone()),
+                                    });
+                                }
+                                split = 1;
+                            }
+                        } else {
+                            ray = spawn(scene, &hit, c.reflected);
+                            reflected |= c.mismatched();
+                        }
+                        specular |= c.mismatched();
+                    }
                 }
+            }
+            let Some(w) = pending.pop() else {
+                break 'walks;
+            };
+            (ray, medium, scattered, reflected, specular, events, power) = (
+                w.ray,
+                w.medium,
+                w.scattered,
+                w.reflected,
+                w.specular,
+                w.events,
+                w.power,
+            );
+            if let Some(h) = w.hero {
+                hw = h;
             }
         }
     }
     out
+}
+
+/// A walk of a split photon waiting to be traced: its state where it entered the medium.
+struct Pending {
+    ray: Ray,
+    medium: u32,
+    scattered: bool,
+    reflected: bool,
+    specular: bool,
+    events: u32,
+    power: f64,
+    hero: Option<HeroWalk>,
 }
 
 /// Trace `photons` photons from the scene's lights and build both maps (see
