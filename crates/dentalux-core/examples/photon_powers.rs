@@ -1,28 +1,47 @@
-//! Print the distribution of stored photon powers per volume map (diagnostics).
+//! The distribution of stored photon powers in each volume map of a `vpm` pass: heavy
+//! photons (a few carrying much of the power) show as kernel-sized blotches in a render.
+//!
+//!     cargo run --release -p dentalux-core --example photon_powers -- SCENE.json SETTINGS.json
+//!
+//! (the scene and settings JSON of the render contract, e.g. from benchmarks/hash_renders.py
+//! --inputs DIR).
 use dentalux_core::contract::{scene_from_json, settings_from_json};
 use dentalux_core::control::Control;
 use dentalux_core::integrators::photon_trace::{trace_camera_maps, StoreMode};
+
 fn main() {
-    let a: Vec<String> = std::env::args().collect();
-    let scene = scene_from_json(&std::fs::read_to_string(&a[1]).unwrap()).unwrap();
-    let (s, _) = settings_from_json(&std::fs::read_to_string(&a[2]).unwrap()).unwrap();
-    let maps = trace_camera_maps(&scene, &s, StoreMode::Paper, 0, &Control::new()).unwrap();
-    for (i, m) in maps.volume.iter().enumerate() {
-        let mut p: Vec<f32> = m.photons().iter().map(|p| p.power).collect();
-        if p.is_empty() {
+    let args: Vec<String> = std::env::args().collect();
+    let [_, scene_path, settings_path] = &args[..] else {
+        eprintln!("usage: photon_powers SCENE.json SETTINGS.json");
+        std::process::exit(2);
+    };
+    let read = |p: &str| std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{p}: {e}"));
+    let scene = scene_from_json(&read(scene_path)).expect("scene");
+    let (settings, _) = settings_from_json(&read(settings_path)).expect("settings");
+    let maps = trace_camera_maps(&scene, &settings, StoreMode::Paper, 0, &Control::new())
+        .expect("photon pass");
+    for (medium, map) in maps.volume.iter().enumerate() {
+        let mut powers: Vec<f64> = map.photons().iter().map(|p| p.power as f64).collect();
+        if powers.is_empty() {
             continue;
         }
-        p.sort_by(|a, b| a.total_cmp(b));
-        let n = p.len();
-        let tot: f64 = p.iter().map(|&x| x as f64).sum();
-        let mean = tot / n as f64;
-        let q = |f: f64| p[((n as f64 - 1.0) * f) as usize] as f64 / mean;
-        let top: f64 = p[n - n / 1000..].iter().map(|&x| x as f64).sum::<f64>() / tot;
+        powers.sort_by(f64::total_cmp);
+        let n = powers.len();
+        let total: f64 = powers.iter().sum();
+        let mean = total / n as f64;
+        let at = |q: f64| powers[((n - 1) as f64 * q) as usize] / mean;
+        let heaviest = (n / 1000).max(1);
+        let share = powers[n - heaviest..].iter().sum::<f64>() / total;
         println!(
-            "medium {i}: n {n} mean {mean:.3e}  p1 {:.3} p50 {:.3} p99 {:.3} p99.9 {:.3} max {:.3} (x mean); top 0.1% carry {:.3}",
-            q(0.01), q(0.5), q(0.99), q(0.999), q(1.0), top
+            "medium {medium}: {n} photons, mean power {mean:.3e}; over the mean: 1 % {:.3}, \
+             50 % {:.3}, 99 % {:.3}, 99.9 % {:.3}, max {:.3}; the heaviest {heaviest} carry \
+             {:.2} % of the power",
+            at(0.01),
+            at(0.5),
+            at(0.99),
+            at(0.999),
+            at(1.0),
+            100.0 * share
         );
     }
-    let sp = maps.surface.photons();
-    println!("surface: n {}", sp.len());
 }

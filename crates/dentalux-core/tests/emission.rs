@@ -171,13 +171,14 @@ fn aimed_emission_keeps_the_stored_power() {
 fn aimed_emission_splits_heavy_photons() {
     let scene = small_medium_scene();
     let aim = Aim::new(&scene, 0.8).expect("the ball is a target");
-    let run = |aim: Aim| {
+    // independent streams for the two (tags 300.. and 400..), so their errors add
+    let run = |aim: Aim, tag0: u64| {
         let e = Emission {
             photons: 50_000,
             aim: Some(aim),
             ..Emission::default()
         };
-        let all = repeat(&scene, &e, VOLUME, 12, 300);
+        let all = repeat(&scene, &e, VOLUME, 12, tag0);
         let mut ratio: f64 = 0.0;
         for maps in &all {
             let l = &maps.ledger;
@@ -200,8 +201,8 @@ fn aimed_emission_splits_heavy_photons() {
         let power: Vec<f64> = all.iter().map(|m| m.ledger.stored_volume[1]).collect();
         (mean_se(&power), ratio)
     };
-    let ((split, se_s), top_split) = run(aim.clone());
-    let ((whole, se_w), top_whole) = run(aim.without_splitting());
+    let ((split, se_s), top_split) = run(aim.clone(), 300);
+    let ((whole, se_w), top_whole) = run(aim.without_splitting(), 400);
     let se = (se_s * se_s + se_w * se_w).sqrt();
     eprintln!(
         "stored power: split {split:.5} ± {se_s:.5} (heaviest photon {top_split:.2} × the \

@@ -143,15 +143,11 @@ impl Aim {
             (position, Emitter::Point)
         } else {
             let (ray, power) = light.sample_emission(u1, u2);
-            return Aimed {
-                ray,
-                power,
-                split: 1,
-            };
+            return Aimed::whole(ray, power);
         };
         let w = self.fraction;
         let j_count = self.targets.len();
-        // cones are recomputed below rather than collected: this runs once per photon
+        // cones are recomputed below rather than collected: this runs once per photon and band
         let d = if u3 < w {
             let j = ((u3 / w * j_count as f64) as usize).min(j_count - 1);
             match Self::cone(o, &self.targets[j]) {
@@ -166,11 +162,7 @@ impl Aim {
         };
         let (base, pdf) = self.densities(&emitter, o, d);
         if base <= 0.0 {
-            return Aimed {
-                ray: Ray::new(o, d),
-                power: 0.0,
-                split: 1,
-            };
+            return Aimed::whole(Ray::new(o, d), 0.0);
         }
         Aimed {
             ray: Ray::new(o, d),
@@ -201,10 +193,11 @@ impl Aim {
         (base, (1.0 - self.fraction) * base + self.fraction * aimed)
     }
 
-    /// Into how many walks a photon with power factor `f` from `o` is split where it enters
-    /// a scattering medium: f over the factor of a photon sent from `o` along a target's
-    /// cone axis (the largest over the targets the light faces), rounded, in
-    /// [1, [`MAX_SPLIT`]]. A photon outside every cone carries 1/(1 − w), an aimed one
+    /// Into how many walks a photon with power factor `f` from `o` is split at its first
+    /// refraction into a scattering medium: f over the factor of a photon sent from `o`
+    /// along a target's cone axis (the largest over the targets the light faces: with
+    /// several targets a photon entering a smaller one keeps the ratio of their cones'
+    /// densities), rounded, in [1, [`MAX_SPLIT`]]. A photon outside every cone carries 1/(1 − w), an aimed one
     /// about p_light/(w p_cone), tens of times less for a small target: the few photons
     /// that reach a medium without being aimed (off a floor or a wall) would otherwise be
     /// that much heavier than their neighbours in the map, each a kernel-sized blotch in
@@ -242,6 +235,17 @@ pub struct Aimed {
     pub power: f64,
     /// Walks to split into (1: none).
     pub split: u32,
+}
+
+impl Aimed {
+    /// An emission that is not split.
+    pub fn whole(ray: Ray, power: f64) -> Self {
+        Self {
+            ray,
+            power,
+            split: 1,
+        }
+    }
 }
 
 #[cfg(test)]

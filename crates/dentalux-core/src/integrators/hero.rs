@@ -97,8 +97,8 @@ impl HeroWalk {
         }
     }
 
-    /// Split the walk into `m` walks: every band's power becomes 1/m of it.
-    pub fn split(&mut self, m: u32) {
+    /// Every band's power becomes 1/`m` of it (the walk is split into `m` walks).
+    pub fn divide_power(&mut self, m: u32) {
         for a in &mut self.analog {
             *a /= m as f64;
         }

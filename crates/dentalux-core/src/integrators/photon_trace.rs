@@ -151,6 +151,7 @@ fn trace_batch(
         }),
     };
     let mut hw = HeroWalk::new(nb);
+    // the walks a split photon still owes (`Aimed::split`), traced after its first one
     let mut pending: Vec<Pending> = Vec::new();
     let led = &mut out.ledger;
     for _ in 0..count {
@@ -179,11 +180,7 @@ fn trace_batch(
             Some(a) => a.sample_emission(&s.lights[li], u1, u2, u3.unwrap_or(0.0)),
             None => {
                 let (ray, power) = s.lights[li].sample_emission(u1, u2);
-                Aimed {
-                    ray,
-                    power,
-                    split: 1,
-                }
+                Aimed::whole(ray, power)
             }
         };
         let Aimed {
@@ -207,9 +204,9 @@ fn trace_batch(
         let mut reflected = false; // any reflection at a mismatched boundary so far
         let mut specular = false; // any event at a mismatched boundary so far
         let mut events = 0u32;
-        // the walks a split photon still owes (`Aimed::split`), traced after this one
+        // (a cancel leaves walks behind; the pass is discarded)
         pending.clear();
-        'walks: loop {
+        loop {
             loop {
                 events += 1;
                 if events > MAX_EVENTS {
@@ -368,7 +365,7 @@ fn trace_batch(
                                 // with 1/split of its power (the expected power is kept)
                                 power /= split as f64;
                                 if spectral {
-                                    hw.split(split);
+                                    hw.divide_power(split);
                                 }
                                 for _ in 1..split {
                                     pending.push(Pending {
@@ -392,8 +389,9 @@ fn trace_batch(
                     }
                 }
             }
-            let Some(w) = pending.pop() else {
-                break 'walks;
+            // up to MAX_SPLIT walks of up to MAX_EVENTS events each: check for a cancel
+            let Some(w) = pending.pop().filter(|_| !control.is_cancelled()) else {
+                break;
             };
             (ray, medium, scattered, reflected, specular, events, power) = (
                 w.ray,
@@ -587,7 +585,8 @@ pub fn trace_emission_bands(
                 Some(cap) if stored + o.volume_len() >= cap => {
                     // the budget is reached inside this batch: trace it again (same stream)
                     // up to the photon that reaches it, so the maps overshoot by less than
-                    // one photon's events and the thread count does not matter
+                    // one emitted photon's events (all its split walks) and the thread count
+                    // does not matter
                     o = batch(b, Some(cap - stored));
                     true
                 }
