@@ -197,8 +197,9 @@ impl Aim {
     /// refraction into a scattering medium: f over the factor of a photon sent from `o`
     /// along a target's cone axis (the largest over the targets the light faces: with
     /// several targets a photon entering a smaller one keeps the ratio of their cones'
-    /// densities), rounded, in [1, [`MAX_SPLIT`]]. A photon outside every cone carries 1/(1 − w), an aimed one
-    /// about p_light/(w p_cone), tens of times less for a small target: the few photons
+    /// densities), rounded, in [1, [`MAX_SPLIT`]]. A photon outside every cone carries
+    /// 1/(1 − w), an aimed one about p_light/(w p_cone), tens of times less for a small
+    /// target: the few photons
     /// that reach a medium without being aimed (off a floor or a wall) would otherwise be
     /// that much heavier than their neighbours in the map, each a kernel-sized blotch in
     /// its band. Splitting keeps the expected power (each walk carries 1/m of it).

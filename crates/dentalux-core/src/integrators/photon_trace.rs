@@ -151,8 +151,6 @@ fn trace_batch(
         }),
     };
     let mut hw = HeroWalk::new(nb);
-    // the walks a split photon still owes (`Aimed::split`), traced after its first one
-    let mut pending: Vec<Pending> = Vec::new();
     let led = &mut out.ledger;
     for _ in 0..count {
         if let Some(stop) = stop_at {
@@ -204,8 +202,9 @@ fn trace_batch(
         let mut reflected = false; // any reflection at a mismatched boundary so far
         let mut specular = false; // any event at a mismatched boundary so far
         let mut events = 0u32;
-        // (a cancel leaves walks behind; the pass is discarded)
-        pending.clear();
+        // the walks a split photon still owes (`Aimed::split`), traced after its first one:
+        // all start from the same state, and a photon is split once
+        let mut pending: Option<(Pending, u32)> = None;
         loop {
             loop {
                 events += 1;
@@ -367,18 +366,17 @@ fn trace_batch(
                                 if spectral {
                                     hw.divide_power(split);
                                 }
-                                for _ in 1..split {
-                                    pending.push(Pending {
-                                        ray,
-                                        medium,
-                                        scattered,
-                                        reflected,
-                                        specular,
-                                        events,
-                                        power,
-                                        hero: spectral.then(|| hw.clone()),
-                                    });
-                                }
+                                let state = Pending {
+                                    ray,
+                                    medium,
+                                    scattered,
+                                    reflected,
+                                    specular,
+                                    events,
+                                    power,
+                                    hero: spectral.then(|| hw.clone()),
+                                };
+                                pending = Some((state, split - 1));
                                 split = 1;
                             }
                         } else {
@@ -390,7 +388,7 @@ fn trace_batch(
                 }
             }
             // up to MAX_SPLIT walks of up to MAX_EVENTS events each: check for a cancel
-            let Some(w) = pending.pop().filter(|_| !control.is_cancelled()) else {
+            let Some((w, left)) = pending.as_mut().filter(|_| !control.is_cancelled()) else {
                 break;
             };
             (ray, medium, scattered, reflected, specular, events, power) = (
@@ -402,15 +400,20 @@ fn trace_batch(
                 w.events,
                 w.power,
             );
-            if let Some(h) = w.hero {
-                hw = h;
+            if let Some(h) = &w.hero {
+                hw.clone_from(h);
+            }
+            *left -= 1;
+            if *left == 0 {
+                pending = None;
             }
         }
     }
     out
 }
 
-/// A walk of a split photon waiting to be traced: its state where it entered the medium.
+/// The state of a split photon where it entered the medium, from which its remaining walks
+/// start.
 struct Pending {
     ray: Ray,
     medium: u32,
