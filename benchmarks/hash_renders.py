@@ -1,5 +1,6 @@
 """Bit-identity check for behaviour-preserving changes: render every integrator on the
-built-in discs and Cornell box (48x36, one band at 540 nm, fixed seed) with the core's
+built-in discs and Cornell box, and the crown figure's teeth (triangle meshes), with aimed
+photons too (48x36, one band at 540 nm, fixed seed) with the core's
 `examples/hash_render` binary and print a hash of each image's bits. Run it with the binary
 built before and after a change (e.g. from a `git worktree` of the old commit) and compare
 the two lists; they must be equal line for line.
@@ -19,8 +20,9 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from dentalux.scene import load_scene
+from dentalux.scene import builtin, load_scene
 from dentalux.scene.builtin import scene_file
+from dentalux.scene.load import scene_from_dict
 
 BASE = {"spp": 2, "photons": 20000, "volume_photons": 100000, "volume_stored": 0, "aim": 0.0,
         "k": 64, "seed": 5, "max_depth": 64, "passes": 1, "alpha": 0.7,
@@ -44,6 +46,9 @@ CASES = [
     ("discs", "vpm-full", {"integrator": "vpm-full"}),
     ("discs", "vpm", {"integrator": "vpm"}),
     ("discs", "vpm-full-beam", {"integrator": "vpm-full", "volume_estimator": "beam"}),
+    ("discs", "vpm-aim", {"integrator": "vpm", "aim": 0.5, "volume_stored": 100000}),
+    ("crown", "vpm-aim", {"integrator": "vpm", "aim": 0.5, "volume_stored": 100000}),
+    ("crown", "volpath-nee", {"integrator": "volpath-nee"}),
 ]
 
 
@@ -57,6 +62,9 @@ def main() -> None:
     for name in ("discs", "cornell"):
         text = load_scene(scene_file(name)).to_json(540.0, (48, 36))
         (folder / f"{name}.json").write_text(text)
+    # the crown figure's scene with coarse teeth meshes (1 mm triangles)
+    crown = scene_from_dict(builtin.crown((48, 36), 1.0)[0]).to_json(540.0, (48, 36))
+    (folder / "crown.json").write_text(crown)
     for scene, name, change in CASES:
         settings = folder / f"{scene}_{name}.settings.json"
         settings.write_text(json.dumps({**BASE, **change}))

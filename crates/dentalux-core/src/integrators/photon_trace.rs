@@ -23,7 +23,7 @@ use crate::geometry::Ray;
 use crate::integrators::aim::{Aim, Aimed};
 use crate::integrators::hero::HeroWalk;
 pub use crate::integrators::ledger::Ledger;
-use crate::integrators::transport::{cross, spawn};
+use crate::integrators::transport::{cross, flight_reach, spawn};
 use crate::math::Frame;
 use crate::photon_map::{Photon, PhotonMap};
 use crate::rng::{Stream, PHOTON_STREAM, SURFACE_PASS};
@@ -217,65 +217,67 @@ fn trace_batch(
                 }
                 let m = &scene.media[medium as usize];
                 let mi = medium as usize;
-                let hit = scene.intersect(&ray, f64::INFINITY);
-                let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
                 let sigma_t = m.sigma_t();
                 let sigma_t_of = |j: usize| scenes[j].media[mi].sigma_t();
-                if sigma_t > 0.0 {
-                    // free flight, eq. 2
-                    let s = sample_exponential(rng.uniform_open0(), sigma_t);
-                    if s < t_hit {
-                        let x = ray.at(s);
-                        if spectral {
-                            // collision density σt e^{−σt s}, relative to the hero's
-                            let ln_density = |st: f64| {
-                                if st > 0.0 {
-                                    st.ln() - st * s
-                                } else {
-                                    f64::NEG_INFINITY
-                                }
-                            };
-                            hw.scale_ln(ln_density(sigma_t), |j| ln_density(sigma_t_of(j)));
-                        }
-                        // scatter or absorb, eqs. 3–4
-                        if rng.uniform() >= m.albedo() {
-                            led.absorbed_medium[mi] += power;
-                            if let Some(bp) = out.bands.as_mut() {
-                                let absorb = |j: usize| 1.0 - scenes[j].media[mi].albedo();
-                                hw.book_with(&mut bp.ledgers, 1.0 - m.albedo(), absorb, |l| {
-                                    &mut l.absorbed_medium[mi]
-                                });
+                // free flight, eq. 2 (∞ in a clear medium)
+                let s = if sigma_t > 0.0 {
+                    sample_exponential(rng.uniform_open0(), sigma_t)
+                } else {
+                    f64::INFINITY
+                };
+                let hit = scene.intersect(&ray, flight_reach(s));
+                let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
+                if sigma_t > 0.0 && s < t_hit {
+                    let x = ray.at(s);
+                    if spectral {
+                        // collision density σt e^{−σt s}, relative to the hero's
+                        let ln_density = |st: f64| {
+                            if st > 0.0 {
+                                st.ln() - st * s
+                            } else {
+                                f64::NEG_INFINITY
                             }
-                            break;
-                        }
-                        if spectral {
-                            hw.scale(m.albedo(), |j| scenes[j].media[mi].albedo());
-                        }
-                        // only scattering events are stored: their density is σs φ, what eq. 11's
-                        // Σ p ΔΦ / V estimates (storing absorptions too would give σt φ, 1/albedo
-                        // too bright)
-                        let single_traced = !scattered && !reflected;
-                        if targets.volume && (mode == StoreMode::All || !single_traced) {
-                            out.volume[mi].push(Photon::new(x, ray.d, power));
-                            led.stored_volume[mi] += power;
-                            if let Some(bp) = out.bands.as_mut() {
-                                bp.volume[mi].extend(hw.powers().iter().map(|&p| p as f32));
-                                hw.book(&mut bp.ledgers, |l| &mut l.stored_volume[mi]);
-                            }
-                        }
-                        // new direction from the phase function, eqs. 7–10
-                        let d = m.phase.sample(ray.d, rng.uniform2(), rng.uniform());
-                        if spectral {
-                            let cos = ray.d.dot(d);
-                            let phase_of = |j: usize| &scenes[j].media[mi].phase;
-                            if (0..nb).any(|j| *phase_of(j) != m.phase) {
-                                hw.scale(m.phase.eval(cos), |j| phase_of(j).eval(cos));
-                            }
-                        }
-                        ray = Ray { o: x, d };
-                        scattered = true;
-                        continue;
+                        };
+                        hw.scale_ln(ln_density(sigma_t), |j| ln_density(sigma_t_of(j)));
                     }
+                    // scatter or absorb, eqs. 3–4
+                    if rng.uniform() >= m.albedo() {
+                        led.absorbed_medium[mi] += power;
+                        if let Some(bp) = out.bands.as_mut() {
+                            let absorb = |j: usize| 1.0 - scenes[j].media[mi].albedo();
+                            hw.book_with(&mut bp.ledgers, 1.0 - m.albedo(), absorb, |l| {
+                                &mut l.absorbed_medium[mi]
+                            });
+                        }
+                        break;
+                    }
+                    if spectral {
+                        hw.scale(m.albedo(), |j| scenes[j].media[mi].albedo());
+                    }
+                    // only scattering events are stored: their density is σs φ, what eq. 11's
+                    // Σ p ΔΦ / V estimates (storing absorptions too would give σt φ, 1/albedo
+                    // too bright)
+                    let single_traced = !scattered && !reflected;
+                    if targets.volume && (mode == StoreMode::All || !single_traced) {
+                        out.volume[mi].push(Photon::new(x, ray.d, power));
+                        led.stored_volume[mi] += power;
+                        if let Some(bp) = out.bands.as_mut() {
+                            bp.volume[mi].extend(hw.powers().iter().map(|&p| p as f32));
+                            hw.book(&mut bp.ledgers, |l| &mut l.stored_volume[mi]);
+                        }
+                    }
+                    // new direction from the phase function, eqs. 7–10
+                    let d = m.phase.sample(ray.d, rng.uniform2(), rng.uniform());
+                    if spectral {
+                        let cos = ray.d.dot(d);
+                        let phase_of = |j: usize| &scenes[j].media[mi].phase;
+                        if (0..nb).any(|j| *phase_of(j) != m.phase) {
+                            hw.scale(m.phase.eval(cos), |j| phase_of(j).eval(cos));
+                        }
+                    }
+                    ray = Ray { o: x, d };
+                    scattered = true;
+                    continue;
                 }
                 if spectral {
                     // no collision before the boundary: e^{−σt t}, relative to the hero's

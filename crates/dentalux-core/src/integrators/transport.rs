@@ -18,6 +18,17 @@ use crate::scene::{Boundary, Scene};
 /// only nested index-matched shells add crossings).
 const MAX_SHADOW_CROSSINGS: usize = 64;
 
+/// How far to search for a boundary ahead of a free flight of sampled length `s` [mm]: only
+/// a face nearer than the collision changes the walk, so the BVH is searched up to `s`
+/// instead of to infinity (inside a tooth mesh the exit face lies millimetres away, a flight
+/// tenths of a millimetre). The relative margin keeps a face at `s` itself, which wins the
+/// tie `s < t_hit` as a boundary, inside the search, so the walk is the one a search to
+/// infinity gives.
+#[inline]
+pub fn flight_reach(s: f64) -> f64 {
+    s * (1.0 + 1e-9)
+}
+
 /// What happens to a ray at a dielectric boundary.
 #[derive(Debug, Clone, Copy)]
 pub struct Crossing {

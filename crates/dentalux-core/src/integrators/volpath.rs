@@ -19,7 +19,7 @@ use crate::geometry::Ray;
 use crate::integrators::planar_nee::PlanarFaces;
 use crate::integrators::settings::{Settings, Stats};
 use crate::integrators::tiles::render_tiles;
-use crate::integrators::transport::{cross, spawn, straight_transmittance};
+use crate::integrators::transport::{cross, flight_reach, spawn, straight_transmittance};
 use crate::math::Frame;
 use crate::rng::Stream;
 use crate::sampling::{cosine_hemisphere, sample_exponential};
@@ -55,9 +55,9 @@ pub fn radiance_with(scene: &Scene, faces: &PlanarFaces, ray: &Ray, rng: &mut St
     let mut vertices = 0u32;
     for _ in 0..MAX_EVENTS {
         let m = &scene.media[medium as usize];
-        let hit = scene.intersect(&ray, f64::INFINITY);
-        let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
         let s = sample_exponential(rng.uniform_open0(), m.sigma_t());
+        let hit = scene.intersect(&ray, flight_reach(s));
+        let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
         let t_seg = s.min(t_hit);
         if count_emission && !planar_covered {
             if let Some((le, _)) = scene.emitted(&ray, t_seg) {
