@@ -6,6 +6,7 @@ use dentalux_core::camera::Camera;
 use dentalux_core::geometry::mesh::TriangleMesh;
 use dentalux_core::geometry::shapes::Sphere;
 use dentalux_core::geometry::{Ray, Vec3};
+use dentalux_core::integrators::transport::flight_reach;
 use dentalux_core::lights::Light;
 use dentalux_core::medium::Medium;
 use dentalux_core::phase::PhaseFunction;
@@ -120,4 +121,47 @@ fn bvh_over_a_mesh_equals_brute_force() {
         assert_eq!(got, brute);
         assert_eq!(scene.occluded(&ray, t_max), brute.is_finite());
     }
+}
+
+#[test]
+fn a_flight_searched_to_its_collision_sees_what_a_search_to_infinity_sees() {
+    // the photon tracer and volpath search the BVH only up to the sampled collision
+    // (`transport::flight_reach`): the face they find must be the one an unbounded search
+    // finds whenever it lies before the collision, and none otherwise
+    let mut mesh = TriangleMesh::uv_sphere(Vec3::ZERO, 5.0, 60, 120);
+    let mut rng = Stream::new(4, 0, 0);
+    for p in &mut mesh.positions {
+        *p *= 1.0 + 0.3 * rng.uniform();
+    }
+    let scene = scene_with(vec![ShapeInstance::new(
+        "m",
+        Geometry::Mesh(mesh),
+        None,
+        Boundary::Opaque { surface: 0 },
+    )
+    .unwrap()]);
+    let (mut before, mut beyond) = (0, 0);
+    for _ in 0..20_000 {
+        let o = uniform_sphere(rng.uniform2()) * (4.5 * rng.uniform());
+        let ray = Ray::new(o, uniform_sphere(rng.uniform2()));
+        let s = -rng.uniform_open0().ln() * 5.0;
+        let full = scene
+            .intersect(&ray, f64::INFINITY)
+            .expect("inside a closed mesh");
+        let capped = scene.intersect(&ray, flight_reach(s));
+        if full.t <= s {
+            before += 1;
+            let c = capped.expect("a face before the collision is found");
+            assert_eq!((c.t.to_bits(), c.shape), (full.t.to_bits(), full.shape));
+        } else if full.t > flight_reach(s) {
+            beyond += 1;
+            assert!(capped.is_none());
+        }
+        // a face exactly at the collision is a boundary (the tie `s < t_hit`)
+        let at = scene
+            .intersect(&ray, flight_reach(full.t))
+            .expect("face at s");
+        assert_eq!(at.t.to_bits(), full.t.to_bits());
+    }
+    assert!(before > 2_000 && beyond > 2_000, "{before} {beyond}");
 }
