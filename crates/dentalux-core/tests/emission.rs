@@ -222,6 +222,89 @@ fn aimed_emission_splits_heavy_photons() {
     );
 }
 
+/// Two targets of different sizes: the 2 mm ball of `small_medium_scene` and an 8 mm ball of
+/// another medium as far from the light, with a cone about 16 times wider. A photon that
+/// reaches the small ball off the floor is split against the photons sent straight at its
+/// entry point, the small ball's own aimed photons, not against the wide cone's (which
+/// would leave it about as many times heavier as the cones' densities differ); the stored
+/// power of each ball is the unsplit emission's.
+#[test]
+fn split_heavy_photons_match_the_target_they_enter() {
+    let base = small_medium_scene();
+    let big = shape(
+        Geometry::Sphere(Sphere {
+            center: Vec3::new(-20.0, 0.0, 8.0),
+            radius: 8.0,
+        }),
+        Boundary::Dielectric {
+            inside: 2,
+            outside: 0,
+        },
+    );
+    let mut shapes = base.shapes().to_vec();
+    shapes.push(big);
+    let mut media = base.media.clone();
+    media.push(medium(0.05, 2.0, 0.5, 1.4));
+    let scene = Scene::new(
+        base.camera,
+        media,
+        base.surfaces.clone(),
+        shapes,
+        base.lights.clone(),
+        0,
+    )
+    .unwrap();
+    let aim = Aim::new(&scene, 0.8).expect("two targets");
+    assert_eq!(aim.targets(), 2);
+    let run = |aim: Aim, tag0: u64| {
+        let e = Emission {
+            photons: 40_000,
+            aim: Some(aim),
+            ..Emission::default()
+        };
+        let all = repeat(&scene, &e, VOLUME, 12, tag0);
+        let mut ratio: f64 = 0.0;
+        for maps in &all {
+            let v = &maps.volume[1];
+            let mean = v.total_power() / v.len() as f64;
+            let top = v
+                .photons()
+                .iter()
+                .map(|p| p.power as f64)
+                .fold(0.0, f64::max);
+            ratio = ratio.max(top / mean);
+        }
+        let small: Vec<f64> = all.iter().map(|m| m.ledger.stored_volume[1]).collect();
+        let large: Vec<f64> = all.iter().map(|m| m.ledger.stored_volume[2]).collect();
+        (mean_se(&small), mean_se(&large), ratio)
+    };
+    let ((s_split, se_ss), (l_split, se_ls), top_split) = run(aim.clone(), 500);
+    let ((s_whole, se_sw), (l_whole, se_lw), top_whole) = run(aim.without_splitting(), 600);
+    eprintln!(
+        "small ball: split {s_split:.5} ± {se_ss:.5} (heaviest {top_split:.2} × the mean), \
+         whole {s_whole:.5} ± {se_sw:.5} (heaviest {top_whole:.2}); large ball: split \
+         {l_split:.5} ± {se_ls:.5}, whole {l_whole:.5} ± {se_lw:.5}"
+    );
+    let se = (se_ss * se_ss + se_sw * se_sw).sqrt();
+    assert!(
+        (s_split - s_whole).abs() < 4.0 * se,
+        "{s_split} vs {s_whole} ± {se}"
+    );
+    let se = (se_ls * se_ls + se_lw * se_lw).sqrt();
+    assert!(
+        (l_split - l_whole).abs() < 4.0 * se,
+        "{l_split} vs {l_whole} ± {se}"
+    );
+    assert!(
+        top_whole > 10.0,
+        "unsplit photons should be heavy here: {top_whole}"
+    );
+    assert!(
+        top_split < 3.0,
+        "split photons should weigh alike: {top_split}"
+    );
+}
+
 /// The surface pass aimed the same way: the power its map stores (light on the floor that
 /// came through the ball, or off the floor again) is the light's own emission's, from far
 /// more photons per photon emitted.

@@ -37,6 +37,7 @@ pub struct Aim {
 }
 
 /// How a light emits, for the mixture: the origin and the density of its own directions.
+#[derive(Debug, Clone, Copy)]
 enum Emitter {
     /// One-sided area light: cosine about `normal`.
     Area { normal: Vec3 },
@@ -167,7 +168,11 @@ impl Aim {
         Aimed {
             ray: Ray::new(o, d),
             power: light.power() * base / pdf,
-            split: self.split_count(&emitter, o, base / pdf),
+            source: Some(Source {
+                origin: o,
+                emitter,
+                factor: base / pdf,
+            }),
         }
     }
 
@@ -193,49 +198,69 @@ impl Aim {
         (base, (1.0 - self.fraction) * base + self.fraction * aimed)
     }
 
-    /// Into how many walks a photon with power factor `f` from `o` is split at its first
-    /// refraction into a scattering medium: f over the factor of a photon sent from `o`
-    /// along a target's cone axis (the largest over the targets the light faces: with
-    /// several targets a photon entering a smaller one keeps the ratio of their cones'
-    /// densities), rounded, in [1, [`MAX_SPLIT`]]. A photon outside every cone carries
-    /// 1/(1 − w), an aimed one about p_light/(w p_cone), tens of times less for a small
-    /// target: the few photons
-    /// that reach a medium without being aimed (off a floor or a wall) would otherwise be
-    /// that much heavier than their neighbours in the map, each a kernel-sized blotch in
-    /// its band. Splitting keeps the expected power (each walk carries 1/m of it).
-    fn split_count(&self, emitter: &Emitter, o: Vec3, f: f64) -> u32 {
+    /// Into how many walks a photon from `source` is split where it enters a scattering
+    /// medium from a clear one, at `x`: its power factor over the factor of a photon sent from the
+    /// same point straight at `x` (what the aimed photons that reach `x` directly carry),
+    /// rounded, in [1, [`MAX_SPLIT`]]; 1 where the light does not emit towards `x`. A photon
+    /// outside every cone carries 1/(1 − w), an aimed one about p_light/(w p_cone), tens of
+    /// times less for a small target: the few photons that reach a medium without being
+    /// aimed (off a floor or a wall) would otherwise be that much heavier than their
+    /// neighbours in the map, each a kernel-sized blotch in its band. Measured at the entry
+    /// point, the reference is the entered target's own (and, where cones overlap, their
+    /// sum's), whatever the other targets' sizes, and a walk that scatters out of a large
+    /// target into a small one is split again there. Splitting keeps the expected power
+    /// (each walk carries 1/m of it).
+    pub fn split_at(&self, source: &Source, x: Vec3) -> u32 {
         if !self.splitting {
             return 1;
         }
-        let reference = self
-            .targets
-            .iter()
-            .filter_map(|t| Self::cone(o, t))
-            .map(|(axis, _)| match self.densities(emitter, o, axis) {
-                (base, pdf) if base > 0.0 => base / pdf,
-                _ => 0.0,
-            })
-            .fold(0.0, f64::max);
-        if reference <= 0.0 {
+        let to = x - source.origin;
+        let len = to.length();
+        if len <= 0.0 || !len.is_finite() {
             return 1;
         }
-        (f / reference).round().clamp(1.0, MAX_SPLIT as f64) as u32
+        match self.densities(&source.emitter, source.origin, to / len) {
+            (base, pdf) if base > 0.0 && pdf > 0.0 => (source.factor * pdf / base)
+                .round()
+                .clamp(1.0, MAX_SPLIT as f64)
+                as u32,
+            _ => 1,
+        }
     }
 }
 
 /// Most walks one photon is split into ([`Aim::sample_emission`]).
 pub const MAX_SPLIT: u32 = 256;
 
-/// An aimed emission: the ray, its power [W] and into how many walks of 1/`split` of that
-/// power it is split where it first enters a scattering medium.
+/// An aimed emission: the ray, its power [W] and where it came from, which decides into how
+/// many walks it is split where it enters a scattering medium ([`Aim::split_at`]).
 #[derive(Debug, Clone, Copy)]
 pub struct Aimed {
     /// The emission ray.
     pub ray: Ray,
     /// Φ p_light / p_mixture.
     pub power: f64,
-    /// Walks to split into (1: none).
-    pub split: u32,
+    /// Where and how it was emitted (`None`: never split).
+    pub source: Option<Source>,
+}
+
+/// The emission point of an aimed photon, its light's own density and its power factor
+/// p_light / p_mixture.
+#[derive(Debug, Clone, Copy)]
+pub struct Source {
+    origin: Vec3,
+    emitter: Emitter,
+    factor: f64,
+}
+
+impl Source {
+    /// The same emission carrying 1/`m` of its power (one of `m` split walks).
+    pub fn divided(self, m: u32) -> Self {
+        Self {
+            factor: self.factor / m as f64,
+            ..self
+        }
+    }
 }
 
 impl Aimed {
@@ -244,7 +269,7 @@ impl Aimed {
         Self {
             ray,
             power,
-            split: 1,
+            source: None,
         }
     }
 }

@@ -20,7 +20,7 @@
 use crate::control::Control;
 use crate::error::{Error, Result};
 use crate::geometry::Ray;
-use crate::integrators::aim::{Aim, Aimed};
+use crate::integrators::aim::{Aim, Aimed, Source};
 use crate::integrators::hero::HeroWalk;
 pub use crate::integrators::ledger::Ledger;
 use crate::integrators::transport::{cross, flight_reach, spawn};
@@ -152,6 +152,7 @@ fn trace_batch(
     };
     let mut hw = HeroWalk::new(nb);
     let led = &mut out.ledger;
+    let mut pending: Vec<(Pending, u32)> = Vec::new();
     for _ in 0..count {
         if let Some(stop) = stop_at {
             // (the field, not `volume_len`: `out.ledger` is borrowed mutably above)
@@ -184,7 +185,7 @@ fn trace_batch(
         let Aimed {
             mut ray,
             power: weight,
-            mut split,
+            mut source,
         } = emit(scene);
         // Φ_l / (N · P(l)): every photon carries Φ_total / N for uniform emission
         let mut power = weight / (p_light * n_total as f64);
@@ -202,9 +203,10 @@ fn trace_batch(
         let mut reflected = false; // any reflection at a mismatched boundary so far
         let mut specular = false; // any event at a mismatched boundary so far
         let mut events = 0u32;
-        // the walks a split photon still owes (`Aimed::split`), traced after its first one:
-        // all start from the same state, and a photon is split once
-        let mut pending: Option<(Pending, u32)> = None;
+        // the walks a split photon still owes (`Aim::split_at`), each entry traced after the
+        // walk that split: those start from its state; a walk may split again where it
+        // enters another medium from a clear one, so they stack (depth first)
+        pending.clear();
         loop {
             loop {
                 events += 1;
@@ -361,10 +363,18 @@ fn trace_batch(
                         if let Some(d) = refracted {
                             ray = spawn(scene, &hit, d);
                             medium = c.to;
-                            if split > 1 && scene.media[medium as usize].sigma_s > 0.0 {
+                            let enters = |m: u32| scene.media[m as usize].sigma_s > 0.0;
+                            let split = match (aim, source) {
+                                (Some(a), Some(src)) if enters(c.to) && !enters(c.from) => {
+                                    a.split_at(&src, hit.p)
+                                }
+                                _ => 1,
+                            };
+                            if split > 1 {
                                 // a heavy photon enters a medium: `split` walks from here, each
                                 // with 1/split of its power (the expected power is kept)
                                 power /= split as f64;
+                                source = source.map(|s| s.divided(split));
                                 if spectral {
                                     hw.divide_power(split);
                                 }
@@ -376,10 +386,10 @@ fn trace_batch(
                                     specular,
                                     events,
                                     power,
+                                    source,
                                     hero: spectral.then(|| hw.clone()),
                                 };
-                                pending = Some((state, split - 1));
-                                split = 1;
+                                pending.push((state, split - 1));
                             }
                         } else {
                             ray = spawn(scene, &hit, c.reflected);
@@ -389,11 +399,17 @@ fn trace_batch(
                     }
                 }
             }
-            // up to MAX_SPLIT walks of up to MAX_EVENTS events each: check for a cancel
-            let Some((w, left)) = pending.as_mut().filter(|_| !control.is_cancelled()) else {
+            // up to MAX_SPLIT walks per split of up to MAX_EVENTS events each: check for a
+            // cancel
+            if control.is_cancelled() {
+                break;
+            }
+            let Some((w, left)) = pending.last_mut() else {
                 break;
             };
-            (ray, medium, scattered, reflected, specular, events, power) = (
+            (
+                ray, medium, scattered, reflected, specular, events, power, source,
+            ) = (
                 w.ray,
                 w.medium,
                 w.scattered,
@@ -401,13 +417,14 @@ fn trace_batch(
                 w.specular,
                 w.events,
                 w.power,
+                w.source,
             );
             if let Some(h) = &w.hero {
                 hw.clone_from(h);
             }
             *left -= 1;
             if *left == 0 {
-                pending = None;
+                pending.pop();
             }
         }
     }
@@ -415,7 +432,7 @@ fn trace_batch(
 }
 
 /// The state of a split photon where it entered the medium, from which its remaining walks
-/// start.
+/// start (its power and power factor already divided).
 struct Pending {
     ray: Ray,
     medium: u32,
@@ -424,6 +441,7 @@ struct Pending {
     specular: bool,
     events: u32,
     power: f64,
+    source: Option<Source>,
     hero: Option<HeroWalk>,
 }
 
