@@ -15,6 +15,7 @@ use dentalux_core::integrators::settings::Settings;
 use dentalux_core::lights::Light;
 use dentalux_core::medium::Medium;
 use dentalux_core::phase::PhaseFunction;
+use dentalux_core::photon_map::PhotonMap;
 use dentalux_core::scene::{Boundary, Geometry, Scene, ShapeInstance};
 use dentalux_core::surface::Surface;
 use std::f64::consts::PI;
@@ -189,36 +190,50 @@ fn aimed_emission_splits_heavy_photons() {
                 "{out} vs {}",
                 l.emitted
             );
-            let v = &maps.volume[1];
-            let mean = v.total_power() / v.len() as f64;
-            let top = v
-                .photons()
-                .iter()
-                .map(|p| p.power as f64)
-                .fold(0.0, f64::max);
-            ratio = ratio.max(top / mean);
+            ratio = ratio.max(heaviest_over_mean(&maps.volume[1]));
         }
         let power: Vec<f64> = all.iter().map(|m| m.ledger.stored_volume[1]).collect();
         (mean_se(&power), ratio)
     };
-    let ((split, se_s), top_split) = run(aim.clone(), 300);
-    let ((whole, se_w), top_whole) = run(aim.without_splitting(), 400);
+    let (split, top_split) = run(aim.clone(), 300);
+    let (whole, top_whole) = run(aim.without_splitting(), 400);
+    split_matches_unsplit("the ball", split, whole);
+    weights_even_out("the ball", top_split, top_whole);
+}
+
+/// The heaviest stored photon's power over the map's mean.
+fn heaviest_over_mean(map: &PhotonMap) -> f64 {
+    let mean = map.total_power() / map.len() as f64;
+    let top = map
+        .photons()
+        .iter()
+        .map(|p| p.power as f64)
+        .fold(0.0, f64::max);
+    top / mean
+}
+
+/// Stored power (mean, s.e.) of split and unsplit emissions on independent streams: equal
+/// within 4 s.e. of the two.
+fn split_matches_unsplit(what: &str, (split, se_s): (f64, f64), (whole, se_w): (f64, f64)) {
     let se = (se_s * se_s + se_w * se_w).sqrt();
-    eprintln!(
-        "stored power: split {split:.5} ± {se_s:.5} (heaviest photon {top_split:.2} × the \
-         mean), whole {whole:.5} ± {se_w:.5} (heaviest {top_whole:.2} × the mean)"
-    );
+    eprintln!("{what}: stored power split {split:.5} ± {se_s:.5}, whole {whole:.5} ± {se_w:.5}");
     assert!(
         (split - whole).abs() < 4.0 * se,
-        "{split} vs {whole} ± {se}"
+        "{what}: {split} vs {whole} ± {se}"
     );
+}
+
+/// The heaviest photon over the mean, split and unsplit: heavy unsplit (> 10×), alike split
+/// (< 3×).
+fn weights_even_out(what: &str, top_split: f64, top_whole: f64) {
+    eprintln!("{what}: heaviest photon {top_split:.2} × the mean split, {top_whole:.2} whole");
     assert!(
         top_whole > 10.0,
-        "unsplit photons should be heavy here: {top_whole}"
+        "{what}: unsplit photons should be heavy: {top_whole}"
     );
     assert!(
         top_split < 3.0,
-        "split photons should weigh alike: {top_split}"
+        "{what}: split photons should weigh alike: {top_split}"
     );
 }
 
@@ -263,46 +278,21 @@ fn split_heavy_photons_match_the_target_they_enter() {
             ..Emission::default()
         };
         let all = repeat(&scene, &e, VOLUME, 12, tag0);
-        let mut ratio: f64 = 0.0;
-        for maps in &all {
-            let v = &maps.volume[1];
-            let mean = v.total_power() / v.len() as f64;
-            let top = v
-                .photons()
-                .iter()
-                .map(|p| p.power as f64)
-                .fold(0.0, f64::max);
-            ratio = ratio.max(top / mean);
-        }
-        let small: Vec<f64> = all.iter().map(|m| m.ledger.stored_volume[1]).collect();
-        let large: Vec<f64> = all.iter().map(|m| m.ledger.stored_volume[2]).collect();
-        (mean_se(&small), mean_se(&large), ratio)
+        let ratio = all
+            .iter()
+            .map(|maps| heaviest_over_mean(&maps.volume[1]))
+            .fold(0.0, f64::max);
+        let stored = |i: usize| {
+            let v: Vec<f64> = all.iter().map(|m| m.ledger.stored_volume[i]).collect();
+            mean_se(&v)
+        };
+        (stored(1), stored(2), ratio)
     };
-    let ((s_split, se_ss), (l_split, se_ls), top_split) = run(aim.clone(), 500);
-    let ((s_whole, se_sw), (l_whole, se_lw), top_whole) = run(aim.without_splitting(), 600);
-    eprintln!(
-        "small ball: split {s_split:.5} ± {se_ss:.5} (heaviest {top_split:.2} × the mean), \
-         whole {s_whole:.5} ± {se_sw:.5} (heaviest {top_whole:.2}); large ball: split \
-         {l_split:.5} ± {se_ls:.5}, whole {l_whole:.5} ± {se_lw:.5}"
-    );
-    let se = (se_ss * se_ss + se_sw * se_sw).sqrt();
-    assert!(
-        (s_split - s_whole).abs() < 4.0 * se,
-        "{s_split} vs {s_whole} ± {se}"
-    );
-    let se = (se_ls * se_ls + se_lw * se_lw).sqrt();
-    assert!(
-        (l_split - l_whole).abs() < 4.0 * se,
-        "{l_split} vs {l_whole} ± {se}"
-    );
-    assert!(
-        top_whole > 10.0,
-        "unsplit photons should be heavy here: {top_whole}"
-    );
-    assert!(
-        top_split < 3.0,
-        "split photons should weigh alike: {top_split}"
-    );
+    let (small, large, top_split) = run(aim.clone(), 500);
+    let (small_whole, large_whole, top_whole) = run(aim.without_splitting(), 600);
+    split_matches_unsplit("small ball", small, small_whole);
+    split_matches_unsplit("large ball", large, large_whole);
+    weights_even_out("small ball", top_split, top_whole);
 }
 
 /// The surface pass aimed the same way: the power its map stores (light on the floor that

@@ -93,22 +93,30 @@ fn fine_mesh_sphere_agrees_with_analytic_sphere() {
     assert!(checked > 10_000);
 }
 
-#[test]
-fn bvh_over_a_mesh_equals_brute_force() {
-    // a bumpy, self-occluding mesh: a sphere with radially displaced vertices
+/// A bumpy, self-occluding mesh: a 5 mm sphere with radially displaced vertices.
+fn bumpy_sphere(rng: &mut Stream) -> TriangleMesh {
     let mut mesh = TriangleMesh::uv_sphere(Vec3::ZERO, 5.0, 60, 120);
-    let mut rng = Stream::new(9, 0, 0);
     for p in &mut mesh.positions {
         *p *= 1.0 + 0.3 * rng.uniform();
     }
-    let tris = mesh.clone();
-    let scene = scene_with(vec![ShapeInstance::new(
+    mesh
+}
+
+fn opaque_mesh_scene(mesh: TriangleMesh) -> Scene {
+    scene_with(vec![ShapeInstance::new(
         "m",
         Geometry::Mesh(mesh),
         None,
         Boundary::Opaque { surface: 0 },
     )
-    .unwrap()]);
+    .unwrap()])
+}
+
+#[test]
+fn bvh_over_a_mesh_equals_brute_force() {
+    let mut rng = Stream::new(9, 0, 0);
+    let tris = bumpy_sphere(&mut rng);
+    let scene = opaque_mesh_scene(tris.clone());
     assert_eq!(scene.primitive_count(), tris.len());
     for i in 0..5_000 {
         let o = uniform_sphere(rng.uniform2()) * (4.0 + 6.0 * rng.uniform());
@@ -128,18 +136,8 @@ fn a_flight_searched_to_its_collision_sees_what_a_search_to_infinity_sees() {
     // the photon tracer and volpath search the BVH only up to the sampled collision
     // (`transport::flight_reach`): the face they find must be the one an unbounded search
     // finds whenever it lies before the collision, and none otherwise
-    let mut mesh = TriangleMesh::uv_sphere(Vec3::ZERO, 5.0, 60, 120);
     let mut rng = Stream::new(4, 0, 0);
-    for p in &mut mesh.positions {
-        *p *= 1.0 + 0.3 * rng.uniform();
-    }
-    let scene = scene_with(vec![ShapeInstance::new(
-        "m",
-        Geometry::Mesh(mesh),
-        None,
-        Boundary::Opaque { surface: 0 },
-    )
-    .unwrap()]);
+    let scene = opaque_mesh_scene(bumpy_sphere(&mut rng));
     let (mut before, mut beyond) = (0, 0);
     for _ in 0..20_000 {
         let o = uniform_sphere(rng.uniform2()) * (4.5 * rng.uniform());
