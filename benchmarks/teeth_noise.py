@@ -42,7 +42,7 @@ def main() -> None:
     bands = F.PAPER_BANDS
     settings = {**F._teeth_settings(q), "spp": a.spp, "k": a.k, "volume_stored": a.stored}
     cs = system("D65", "2")
-    divisor, _, white = colour_inputs(sc, bands)
+    divisor, _, _ = colour_inputs(sc, bands)
     labs, cpus = [], []
     for seed in range(1, max(a.seeds, 2) + 1):
         c0 = time.process_time()

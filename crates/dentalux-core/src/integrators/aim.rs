@@ -199,12 +199,12 @@ impl Aim {
     }
 
     /// Into how many walks a photon from `source` is split where it enters a scattering
-    /// medium from a clear one, at `x`: its power factor over the factor of a photon sent from the
-    /// same point straight at `x` (what the aimed photons that reach `x` directly carry),
-    /// rounded, in [1, [`MAX_SPLIT`]]; 1 where the light does not emit towards `x`. A photon
-    /// outside every cone carries 1/(1 − w), an aimed one about p_light/(w p_cone), tens of
-    /// times less for a small target: the few photons that reach a medium without being
-    /// aimed (off a floor or a wall) would otherwise be that much heavier than their
+    /// medium from a clear one, at `x`: its power factor over the factor of a photon sent
+    /// from the same point straight at `x` (what the aimed photons that reach `x` directly
+    /// carry), rounded, in [1, [`MAX_SPLIT`]]; 1 where the light does not emit towards `x`.
+    /// A photon outside every cone carries 1/(1 − w), an aimed one about p_light/(w p_cone),
+    /// tens of times less for a small target: the few photons that reach a medium without
+    /// being aimed (off a floor or a wall) would otherwise be that much heavier than their
     /// neighbours in the map, each a kernel-sized blotch in its band. Measured at the entry
     /// point, the reference is the entered target's own (and, where cones overlap, their
     /// sum's), whatever the other targets' sizes, and a walk that scatters out of a large
