@@ -1,14 +1,17 @@
 """Colour speckle of the preview figures (issue 16): the standard deviation of L*, a* and b*
-over the pixels of a flat patch on the top of Fig. 3's raised disc (and Fig. 4's), rendered
-as the figures render them (`figures.disc_scene`, preview photon counts, three bands,
+over the pixels of a flat patch on the top of Fig. 3's raised disc (and Fig. 4's), or on the
+ribbon in its shadow (`--patch under`), or on Fig. 5's ceiling (`--patch ceiling`): the last
+two are lit only by the surface photon map's light. Rendered
+as the figures render them (`figures.disc_scene`, the quality's photon counts, three bands,
 correlated streams), with band-by-band photon passes and with one spectral photon pass
 (`spectral_photons`: hero-band walks, balance-heuristic powers, shared camera streams).
 The patch is flat and evenly lit, so its spread is noise; a* and b* spread is the coloured
 speckle. Also prints each render's wall and CPU seconds (user + system of this process).
 
-    .venv/bin/python benchmarks/chroma_noise.py [--figures fig3,fig4] [--half-mm 2.0]
+    .venv/bin/python benchmarks/chroma_noise.py [--figures fig3,fig4,fig5]
+        [--quality preview|paper] [--patch top,under,ceiling,wall] [--half-mm 2.0]
         [--bands 450,540,605 | --bands 16] [--stored 4000000] [--resolution 320x240]
-        [--k 800] [--radius 0.3] [--passes band,spectral]
+        [--k 800] [--spp 4] [--radius 0.3] [--surface-radius 1.0] [--passes band,spectral]
 
 ``--bands 16``: 16 bands evenly over 400-700 nm (20 nm apart) instead of the figures' three.
 """
@@ -27,8 +30,23 @@ from dentalux.render import render
 from dentalux.scene import scene_from_dict
 from dentalux.scene.project import square_region
 
+# Flat patches: centre [mm], half-size [mm], normal towards the camera. `top`: the raised
+# disc's top. `under`: the ribbon under it inside one check, where every point sees none of
+# the overhead light past the disc's underside (its umbra, worked out from the light's
+# corners) and the camera sees it through the 5 mm gap. `ceiling`: Fig. 5's ceiling beside
+# the light, lit only by the walls (the surface map's light); `wall`: its back wall, top
+# left, lit by the light and the other walls.
+PATCHES = {"top": ([8.0, 0.0, 10.0], 2.0, (0, 0, 1)),
+           "under": ([8.6, -0.95, 0.0], 0.7, (0, 0, 1)),
+           "ceiling": ([12.0, 60.0, 30.0], 5.0, (0, -1, 0)),
+           "wall": ([12.0, 45.0, 60.0], 5.0, (0, 0, -1))}
+
 
 def scene_for(fig: str, q) -> dict:
+    if fig == "fig5":
+        d = F.cornell_teeth_scene(q)
+        F.lower_anisotropy(d, q)
+        return d
     if fig == "fig3":
         return F.disc_scene({"material": "biomaterial-table1"}, 5.0, q)
     bio, enamel = materials.get("biomaterial-table1"), materials.get("enamel")
@@ -39,39 +57,69 @@ def scene_for(fig: str, q) -> dict:
                                        F.PAPER_BANDS), 5.0, q)
 
 
+def settings_for(fig: str, q, a) -> dict:
+    """The figure's own settings (figures._render_figure, figures._teeth_settings), with the
+    options given on the command line in their place."""
+    if fig == "fig5":
+        s = dict(photons=q.photons, **F._teeth_settings(q))
+        s["volume_stored"] = a.stored or s["volume_stored"]
+    else:
+        stored = a.stored or q.volume_photons
+        s = dict(spp=q.spp, photons=q.photons, volume_photons=F.EMIT_CAP * stored,
+                 volume_stored=stored, aim=F.FIGURE_AIM, k=q.k, radius=q.radius_mm)
+        s["surface_radius"] = q.surface_radius_mm
+    for key in ("spp", "k", "radius", "surface_radius"):
+        if getattr(a, key) is not None:
+            s[key] = getattr(a, key)
+    return {k: v for k, v in s.items() if v is not None}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--figures", default="fig3,fig4")
-    ap.add_argument("--half-mm", type=float, default=2.0)
+    ap.add_argument("--figures", default="fig3,fig4", help="fig3, fig4, fig5")
+    ap.add_argument("--quality", default="preview", choices=sorted(F.QUALITIES))
+    ap.add_argument("--patch", default="top",
+                    help="patches, comma-separated: " + ", ".join(sorted(PATCHES)))
+    ap.add_argument("--half-mm", type=float, default=None,
+                    help="the patch's half-size [mm] (default: the patch's own)")
     ap.add_argument("--bands", default="450,540,605")
     ap.add_argument("--stored", type=int, default=None,
-                    help="volume photons stored per pass (default: the preview figures')")
-    ap.add_argument("--resolution", default=None, help="WxH (default: the preview's)")
-    ap.add_argument("--k", type=int, default=None, help="photons per estimate (preview's)")
+                    help="volume photons stored per pass (default: the figure's)")
+    ap.add_argument("--resolution", default=None, help="WxH (default: the quality's)")
+    ap.add_argument("--k", type=int, default=None, help="photons per estimate (figure's)")
+    ap.add_argument("--spp", type=int, default=None, help="camera samples per pixel (figure's)")
     ap.add_argument("--radius", type=float, default=None,
-                    help="largest gathering radius [mm] (default: the preview's)")
+                    help="largest gathering radius [mm] (default: the figure's)")
+    ap.add_argument("--surface-radius", type=float, default=None,
+                    help="largest gathering radius of the surface map [mm] (figure's)")
     ap.add_argument("--passes", default="band,spectral",
                     help="photon passes to compare: band (band by band), spectral")
     a = ap.parse_args()
-    q = F.QUALITIES["preview"]
+    q = F.QUALITIES[a.quality]
     if a.resolution:
         w, h = (int(x) for x in a.resolution.split("x"))
         q = F.Quality(**{**F.asdict(q), "resolution": (w, h)})
     bands = ([float(b) for b in a.bands.split(",")] if "," in a.bands
              else list(np.linspace(400.0, 700.0, int(a.bands))))
-    stored = a.stored or q.volume_photons
     cs = system("D65", "2")
-    settings = dict(spp=q.spp, photons=q.photons, volume_photons=F.EMIT_CAP * stored,
-                    volume_stored=stored, aim=F.FIGURE_AIM, k=a.k or q.k,
-                    radius=a.radius or q.radius_mm)
+    patches = {}
+    for name in a.patch.split(","):
+        if name not in PATCHES:
+            ap.error(f"--patch {name}: allowed {', '.join(sorted(PATCHES))}")
+        centre, half, facing = PATCHES[name]
+        patches[name] = (centre, a.half_mm or half, facing)
     for fig in a.figures.split(","):
         d = scene_for(fig, q)
         sc = scene_from_dict(d)
-        x0, y0, x1, y1 = square_region(d["camera"], [8.0, 0.0, 10.0], a.half_mm, (0, 0, 1))
-        print(f"{fig}: patch {x1 - x0}x{y1 - y0} px on the raised disc's top "
-              f"({2 * a.half_mm:g} mm square), {q.resolution[0]}x{q.resolution[1]}, "
-              f"{len(bands)} bands, {stored} volume photons stored, k {settings['k']}, "
-              f"radius <= {settings['radius']} mm")
+        settings = settings_for(fig, q, a)
+        boxes = {n: square_region(d["camera"], c, h, f) for n, (c, h, f) in patches.items()}
+        for n, (x0, y0, x1, y1) in boxes.items():
+            print(f"{fig}: patch '{n}' {x1 - x0}x{y1 - y0} px ({2 * patches[n][1]:g} mm "
+                  "square)")
+        print(f"  {q.resolution[0]}x{q.resolution[1]}, {len(bands)} bands, "
+              f"{settings['volume_stored']} volume photons stored, k {settings['k']}, "
+              f"spp {settings['spp']}, radius <= {settings['radius']} mm, surface radius <= "
+              f"{settings.get('surface_radius', settings['radius'])} mm")
         passes = {"band": False, "spectral": True}
         for spectral in (passes[p] for p in a.passes.split(",")):
             c0, t0 = time.process_time(), time.perf_counter()
@@ -80,14 +128,15 @@ def main() -> None:
                          **settings)
             wall, cpu = time.perf_counter() - t0, time.process_time() - c0
             divisor, _, white = colour_inputs(sc, bands)
-            px = (res.radiance[y0:y1, x0:x1] / divisor / white).reshape(-1, len(bands))
-            lab = np.array([cs.spectrum_to_Lab(p, bands) for p in px])
-            sd = lab.std(axis=0, ddof=1)
-            mean = lab.mean(axis=0)
-            name = "spectral photons" if spectral else "band by band   "
-            print(f"  {name}: sd L* {sd[0]:.2f} a* {sd[1]:.2f} b* {sd[2]:.2f}  "
-                  f"(mean {mean[0]:.1f} / {mean[1]:.1f} / {mean[2]:.1f})  "
-                  f"{wall:.0f} s wall, {cpu:.0f} CPU-s")
+            name = "spectral photons" if spectral else "band by band"
+            print(f"  {name}: {wall:.0f} s wall, {cpu:.0f} CPU-s")
+            for n, (x0, y0, x1, y1) in boxes.items():
+                px = (res.radiance[y0:y1, x0:x1] / divisor / white).reshape(-1, len(bands))
+                lab = np.array([cs.spectrum_to_Lab(p, bands) for p in px])
+                sd = lab.std(axis=0, ddof=1)
+                mean = lab.mean(axis=0)
+                print(f"    {n}: sd L* {sd[0]:.2f} a* {sd[1]:.2f} b* {sd[2]:.2f}  "
+                      f"(mean {mean[0]:.1f} / {mean[1]:.1f} / {mean[2]:.1f})")
 
 
 if __name__ == "__main__":

@@ -72,6 +72,12 @@ class Quality:
     teeth_volume_stored: int = 0
     # Photons per volume estimate in the teeth scenes.
     teeth_k: int = 400
+    # Largest gathering radius of the surface photon map [mm], every scene: the media's
+    # radii (tenths of a millimetre) left the light under the raised disc and on Fig. 5's
+    # walls a few photons per estimate; 2 mm is above the k-th neighbour's distance there
+    # (4 mm renders the same) and reads volpath-nee's level under the disc
+    # (docs/figures.md, "The surface map's radius").
+    surface_radius_mm: float = 2.0
     # Tissue figures (Fig. 4's enamel, Fig. 5, the crown): anisotropy lowered to this g by the
     # similarity relation (μs' kept), as the paper scaled its teeth's anisotropy; None
     # renders the library's g (docs/figures.md).
@@ -157,10 +163,11 @@ def _render_figure(name: str, scene: dict, out: Path, quality: Quality, integrat
     settings = dict(spp=quality.spp, photons=quality.photons,
                     volume_photons=EMIT_CAP * quality.volume_photons,
                     volume_stored=quality.volume_photons, aim=FIGURE_AIM, k=quality.k,
-                    radius=quality.radius_mm)
+                    radius=quality.radius_mm, surface_radius=quality.surface_radius_mm)
     settings.update(overrides)
     if integrator in PATH_TRACERS:
-        for key in ("volume_photons", "volume_stored", "aim", "photons", "k", "radius"):
+        for key in ("volume_photons", "volume_stored", "aim", "photons", "k", "radius",
+                    "surface_radius"):
             settings.pop(key, None)
     result = render(sc, integrator=integrator, bands=bands, seed=1, correlated_bands=True,
                     **settings)
@@ -218,7 +225,8 @@ def cornell_teeth_scene(quality: Quality) -> dict:
 def _teeth_settings(quality: Quality) -> dict:
     return {"volume_photons": quality.teeth_volume_photons, "aim": FIGURE_AIM,
             "volume_stored": quality.teeth_volume_stored, "radius": quality.teeth_radius_mm,
-            "spp": quality.teeth_spp, "k": quality.teeth_k}
+            "surface_radius": quality.surface_radius_mm, "spp": quality.teeth_spp,
+            "k": quality.teeth_k}
 
 
 def lower_anisotropy(scene: dict, quality: Quality, bands=PAPER_BANDS) -> dict:

@@ -159,9 +159,10 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     resolution: (width, height) or "WxH", overriding the camera's. ``options``:
     volume_photons, volume_stored (photons the volume maps should hold: emission stops there,
     at most volume_photons), aim (fraction of volume photons aimed at the media, [0, 1)),
-    k, radius [mm], step [mm], max_depth, passes, alpha, final_gather, kernel_layer (0 = the
-    paper's spherical kernel), kernel_clip (clip the layer kernel by every face, not only
-    the camera ray's entry and exit planes), pass_index (render pass p of a progressive
+    k, radius [mm], surface_radius [mm] (the surface map's; default radius), step [mm],
+    max_depth, passes, alpha, final_gather, kernel_layer (0 = the paper's spherical kernel),
+    kernel_clip (clip the layer kernel by every face, not only the camera ray's entry and
+    exit planes), pass_index (render pass p of a progressive
     render: its own photon maps and paths, the pixels' sub-pixel sequence continued where
     pass p − 1 stopped; the mean of passes 0..N−1 is what ``dentalux render --passes N``
     shows).

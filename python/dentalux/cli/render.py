@@ -72,6 +72,8 @@ def render_command(
     ),
     k: int = typer.Option(None, help="nearest photons in a radiance estimate"),
     radius: float = typer.Option(None, help="maximum photon search radius [mm]"),
+    surface_radius: float = typer.Option(
+        None, help="maximum search radius of the surface photon map [mm] (default: --radius)"),
     step: float = typer.Option(None, help="ray-marching step inside media [mm]"),
     passes: int = typer.Option(None, help="progressive passes (ppm: Knaus-Zwicker passes; "
                                "others: independent seeds), one task per band and pass"),
@@ -130,7 +132,8 @@ def render_command(
     band_list = parse_bands(bands)
     options = {k_: v for k_, v in (("volume_photons", volume_photons),
                                    ("volume_stored", volume_stored), ("aim", aim), ("k", k),
-                                   ("radius", radius), ("step", step), ("alpha", alpha),
+                                   ("radius", radius), ("surface_radius", surface_radius),
+                                   ("step", step), ("alpha", alpha),
                                    ("kernel_layer", kernel_layer),
                                    ("kernel_clip", kernel_clip),
                                    ("volume_estimator", volume_estimator),

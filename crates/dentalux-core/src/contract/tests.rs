@@ -136,6 +136,7 @@ fn settings_default_to_the_cores_and_name_bad_keys() {
             "settings.spp = 0 is out of range: allowed ≥ 1",
         ),
         (json!({"radius": -1.0}), "settings.radius"),
+        (json!({"surface_radius": 0.0}), "settings.surface_radius"),
         (
             json!({"sp": 3}),
             "settings.sp: unknown key; allowed: aim, alpha,",
@@ -181,6 +182,7 @@ fn the_schema_lists_every_key_with_the_cores_defaults() {
     assert_eq!(get("kernel_layer")["default"], json!(d.kernel_layer));
     assert_eq!(get("alpha")["lo_open"], json!(true));
     assert_eq!(get("radius")["default"], Value::Null);
+    assert_eq!(get("surface_radius")["default"], Value::Null);
     assert_eq!(schema["max_passes"], json!(MAX_PASSES));
     let names: Vec<&str> = (schema["integrators"].as_array().unwrap().iter())
         .map(|i| i["name"].as_str().unwrap())

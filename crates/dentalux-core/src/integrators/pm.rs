@@ -160,7 +160,9 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
         scene,
         map: &maps.surface,
         k: settings.k,
-        r_max: settings.radius.unwrap_or_else(|| default_r_max(scene)),
+        r_max: settings
+            .surface_cap()
+            .unwrap_or_else(|| default_r_max(scene)),
         final_gather: settings.final_gather,
         max_depth: settings.max_depth,
     };

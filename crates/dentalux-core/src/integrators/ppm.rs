@@ -54,6 +54,7 @@ fn pass_estimator<'a>(scene: &'a Scene, settings: &Settings, maps: &'a PhotonMap
     let params = VpmParams {
         k: settings.k,
         radius: settings.radius,
+        surface_radius: settings.surface_cap(),
         step: settings.step,
         mode: StoreMode::All,
         max_depth: settings.max_depth,
@@ -87,7 +88,7 @@ fn first_radii(
     (
         vol,
         settings
-            .radius
+            .surface_cap()
             .unwrap_or(FIRST_RADIUS_FRACTION * vpm.surface_radius),
     )
 }

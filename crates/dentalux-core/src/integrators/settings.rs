@@ -165,8 +165,11 @@ pub struct Settings {
     pub aim: f64,
     /// Photons per density estimate.
     pub k: usize,
-    /// Largest gathering radius [mm].
+    /// Largest gathering radius [mm]: of every photon map, unless `surface_radius` sets the
+    /// surface map's.
     pub radius: Option<f64>,
+    /// Largest gathering radius of the surface photon map [mm] ([`Settings::surface_cap`]).
+    pub surface_radius: Option<f64>,
     /// Ray-marching step [mm].
     pub step: Option<f64>,
     /// Seed of every random stream.
@@ -201,6 +204,15 @@ pub struct Settings {
 }
 
 impl Settings {
+    /// The surface photon map's largest gathering radius [mm]: `surface_radius`, else
+    /// `radius`; `None` derives it from the map. A volume map's radius suits a medium's
+    /// thickness (tenths of a millimetre in a disc), while a surface map holds a few photons
+    /// per square millimetre over a whole floor: one radius for both leaves the surface
+    /// estimate a handful of photons.
+    pub fn surface_cap(&self) -> Option<f64> {
+        self.surface_radius.or(self.radius)
+    }
+
     /// The volume estimator in effect: `bre` always uses the beam.
     pub fn estimator(&self) -> VolumeEstimator {
         if self.integrator == Integrator::Bre {
@@ -222,6 +234,7 @@ impl Default for Settings {
             aim: DEFAULT_AIM,
             k: 64,
             radius: None,
+            surface_radius: None,
             step: None,
             seed: 1,
             band: 0,
@@ -298,7 +311,7 @@ const fn unit_interval(lo_open: bool, hi_open: bool) -> Range {
 /// Every key of the settings contract, in the order the docs and error messages list them.
 /// Defaults are [`Settings::default`]'s; `threads` (worker threads, default all cores) is
 /// read by the contract decoder, not stored in [`Settings`].
-pub const KEYS: [Key; 21] = [
+pub const KEYS: [Key; 22] = [
     key("integrator", Range::Integrator, true),
     key("spp", at_least(1), true),
     key("photons", at_least(0), true),
@@ -307,6 +320,7 @@ pub const KEYS: [Key; 21] = [
     key("aim", unit_interval(false, true), true),
     key("k", at_least(1), true),
     key("radius", Range::Positive, true),
+    key("surface_radius", Range::Positive, true),
     key("step", Range::Positive, true),
     key("seed", at_least(0), true),
     key("max_depth", at_least(1), true),
@@ -360,7 +374,11 @@ impl Settings {
                 MAX_PASSES - 1
             )));
         }
-        for (k, v) in [("radius", self.radius), ("step", self.step)] {
+        for (k, v) in [
+            ("radius", self.radius),
+            ("surface_radius", self.surface_radius),
+            ("step", self.step),
+        ] {
             if let Some(v) = v {
                 crate::error::check_positive(&format!("settings.{k}"), v, "mm")?;
             }

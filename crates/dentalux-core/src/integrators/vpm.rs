@@ -63,8 +63,10 @@ const SINGLE_SAMPLES: u32 = 8;
 pub struct VpmParams {
     /// Photons per density estimate.
     pub k: usize,
-    /// Largest gathering radius [mm].
+    /// Largest gathering radius in media [mm].
     pub radius: Option<f64>,
+    /// Largest gathering radius of the surface map [mm] (`Settings::surface_cap`).
+    pub surface_radius: Option<f64>,
     /// Ray-marching step Δx [mm].
     pub step: Option<f64>,
     /// `Paper` (`vpm`) or `All` (`vpm-full`): who carries single scattering.
@@ -105,6 +107,7 @@ impl Default for VpmParams {
         Self {
             k: 64,
             radius: None,
+            surface_radius: None,
             step: None,
             mode: StoreMode::Paper,
             max_depth: 64,
@@ -254,7 +257,7 @@ impl<'a> Vpm<'a> {
             })
             .collect();
         // capped like the surface photon mapping integrator's default (0.1 × scene diagonal)
-        let surface_radius = params.radius.unwrap_or_else(|| {
+        let surface_radius = params.surface_radius.unwrap_or_else(|| {
             default_radius(&maps.surface, params.k, true).min(super::pm::default_r_max(scene))
         });
         Self {
@@ -673,6 +676,7 @@ pub fn render_with_maps(
     let params = VpmParams {
         k: settings.k,
         radius: settings.radius,
+        surface_radius: settings.surface_cap(),
         step: settings.step,
         mode,
         max_depth: settings.max_depth,
