@@ -14,8 +14,9 @@
 //!    takes ρ times the radiance found there (direct + density estimate at the second surface):
 //!    it hides the blotches of the density estimate at the cost of one more ray per sample.
 //!
-//! `r_max` is `settings.radius` or, when unset, a tenth of the scene's bounding-box diagonal
-//! (it only matters where fewer than k photons lie within it).
+//! `r_max` is `settings.surface_cap()` (`surface_radius`, else `radius`) or, when unset, a
+//! tenth of the scene's bounding-box diagonal (it only matters where fewer than k photons lie
+//! within it).
 
 use super::direct::{check_clear_media, direct_irradiance, facing};
 use super::photon_trace::{trace_photons, StoreMode};

@@ -17,7 +17,8 @@
 //! | setting | default | meaning |
 //! |---|---|---|
 //! | `k` | 64 | photons per estimate |
-//! | `radius` [mm] | 2 · cbrt(3 k V / (4π n)) per medium: twice the radius that holds k photons at the map's mean density (V: bounding box of the map's photons, n: its photons), at most the medium's typical half-thickness ([`half_thickness`]); surface map: the 2-D analogue, at most 0.1 × scene diagonal | largest gathering radius |
+//! | `radius` [mm] | 2 · cbrt(3 k V / (4π n)) per medium: twice the radius that holds k photons at the map's mean density (V: bounding box of the map's photons, n: its photons), at most the medium's typical half-thickness ([`half_thickness`]) | largest gathering radius in media |
+//! | `surface_radius` [mm] | `radius`, else the 2-D analogue of its default, at most 0.1 × scene diagonal | largest gathering radius of the surface map |
 //! | `kernel_layer` | 0.3 | volume kernel: half-height of the boundary-aligned layer kernel over the gathering radius; 0 = the paper's sphere |
 //! | `kernel_clip` | true | clip the layer kernel (and the surface map's disc) by every other face within it, found by 8 rays: not only by the camera ray's entry and exit planes |
 //! | `step` Δx [mm] | per medium min(0.5 / σt, scene diagonal / 64); never below 1e-5 × diagonal | ray-marching step |
