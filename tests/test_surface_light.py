@@ -1,0 +1,44 @@
+"""The surface photon map's light where it is the only light: the ribbon in the umbra of
+Fig. 3's raised disc, lit through the disc and by the floor. `vpm` at the paper figures'
+surface-map settings (k, `surface_radius`) against the unbiased `volpath-nee`, per band,
+through a narrow camera on that spot (docs/figures.md, "The surface map's radius")."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from dentalux import figures as F
+from dentalux.render import render
+from dentalux.scene import scene_from_dict
+
+# a spot inside one check, in the umbra of the raised disc's underside and seen through the
+# 5 mm gap (benchmarks/chroma_noise.py, patch "under")
+SPOT = [8.6, -0.95, 0.0]
+
+
+def _spot_scene():
+    q = F.QUALITIES["preview"]
+    d = F.disc_scene({"material": "biomaterial-table1"}, 5.0, q)
+    d["camera"].update(look_at=SPOT, fov_deg=1.0, resolution=[8, 8])
+    return scene_from_dict(d)
+
+
+@pytest.mark.slow
+def test_light_under_the_raised_disc_matches_volpath():
+    sc = _spot_scene()
+    truth = render(sc, integrator="volpath-nee", bands=F.PAPER_BANDS, spp=32768, seed=7,
+                   correlated_bands=True, progress=False).radiance.reshape(-1, 3)
+    t, t_se = truth.mean(0), truth.std(0, ddof=1) / np.sqrt(len(truth))
+    paper = F.QUALITIES["paper"]
+    # the volume maps do not light the spot: a small volume budget keeps the test short,
+    # while the surface map holds all `photons` photons' light as in the figure
+    means = np.array([
+        render(sc, integrator="vpm", bands=F.PAPER_BANDS, seed=seed, correlated_bands=True,
+               progress=False, spp=4, photons=paper.photons, volume_photons=20_000_000,
+               volume_stored=1_000_000, aim=F.FIGURE_AIM, k=paper.k, radius=paper.radius_mm,
+               surface_radius=paper.surface_radius_mm).radiance.reshape(-1, 3).mean(0)
+        for seed in range(1, 9)])
+    m, m_se = means.mean(0), means.std(0, ddof=1) / np.sqrt(len(means))
+    print(f"\nvpm / volpath-nee per band: {np.round(m / t, 4)} "
+          f"± {np.round(np.hypot(m_se, t_se) / t, 4)}")
+    assert (np.abs(m - t) < 4 * np.hypot(m_se, t_se)).all(), (m, m_se, t, t_se)
