@@ -546,7 +546,7 @@ def test_render_api_with_fake_core(fake_core):
     scene0, settings0 = fake_core.calls[0]
     assert settings0 == {"integrator": "pm", "spp": 2, "photons": 100, "volume_photons": 5,
                          "volume_stored": 0, "aim": 0.0, "k": 8, "radius": 1.5,
-                         "step": None, "seed": 7, "band": 605,
+                         "surface_radius": None, "step": None, "seed": 7, "band": 605,
                          "threads": None, "max_depth": 64, "passes": 1, "alpha": 0.7,
                          "final_gather": False, "kernel_layer": 0.3, "kernel_clip": True,
                          "volume_estimator": "points", "spectral_photons": False}
