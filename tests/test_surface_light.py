@@ -1,7 +1,9 @@
 """The surface photon map's light where it is the only light: the ribbon in the umbra of
 Fig. 3's raised disc, lit through the disc and by the floor. `vpm` at the paper figures'
 surface-map settings (k, `surface_radius`) against the unbiased `volpath-nee`, per band,
-through a narrow camera on that spot (docs/figures.md, "The surface map's radius")."""
+through a narrow camera on that spot (docs/figures.md, "The surface map's radius"). With
+24 seeds 450 nm reads 5 ± 1 % low there (docs/figures.md); 8 seeds' 4 standard errors are
+about 8 %."""
 
 from __future__ import annotations
 
