@@ -51,18 +51,11 @@ fn trace_pass(
 
 /// The estimator of one pass's maps, before its radii are set.
 fn pass_estimator<'a>(scene: &'a Scene, settings: &Settings, maps: &'a PhotonMaps) -> Vpm<'a> {
-    let params = VpmParams {
-        k: settings.k,
-        radius: settings.radius,
-        surface_radius: settings.surface_cap(),
-        step: settings.step,
-        mode: StoreMode::All,
-        max_depth: settings.max_depth,
-        layer: settings.kernel_layer,
-        clip: settings.kernel_clip,
-        ..VpmParams::default()
-    };
-    Vpm::new(scene, maps, params)
+    Vpm::new(
+        scene,
+        maps,
+        VpmParams::from_settings(settings, StoreMode::All),
+    )
 }
 
 /// Pass 1's radius r_1 as a fraction of the `vpm` default radius, when `settings.radius`

@@ -120,6 +120,24 @@ impl Default for VpmParams {
     }
 }
 
+impl VpmParams {
+    /// The parameters a render's settings give (`vpm`, `vpm-full`, `bre`, `ppm`), with `mode`
+    /// choosing who carries single scattering; the rest at their defaults.
+    pub fn from_settings(settings: &Settings, mode: StoreMode) -> Self {
+        Self {
+            k: settings.k,
+            radius: settings.radius,
+            surface_radius: settings.surface_cap(),
+            step: settings.step,
+            mode,
+            max_depth: settings.max_depth,
+            layer: settings.kernel_layer,
+            clip: settings.kernel_clip,
+            ..Self::default()
+        }
+    }
+}
+
 /// Per-medium values resolved from the scene and the maps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MediumSetup {
@@ -673,19 +691,11 @@ pub fn render_with_maps(
     full: bool,
     maps: &PhotonMaps,
 ) -> Result<(Vec<f32>, Stats)> {
-    let mode = store_mode(full);
-    let params = VpmParams {
-        k: settings.k,
-        radius: settings.radius,
-        surface_radius: settings.surface_cap(),
-        step: settings.step,
-        mode,
-        max_depth: settings.max_depth,
-        layer: settings.kernel_layer,
-        clip: settings.kernel_clip,
-        ..VpmParams::default()
-    };
-    let mut vpm = Vpm::new(scene, maps, params);
+    let mut vpm = Vpm::new(
+        scene,
+        maps,
+        VpmParams::from_settings(settings, store_mode(full)),
+    );
     let t_beams = Instant::now();
     let beam = settings.estimator() == VolumeEstimator::Beam;
     if beam {
