@@ -64,14 +64,13 @@ def settings_for(fig: str, q, a) -> dict:
         s = dict(photons=q.photons, **F._teeth_settings(q))
         s["volume_stored"] = a.stored or s["volume_stored"]
     else:
-        stored = a.stored or q.volume_photons
-        s = dict(spp=q.spp, photons=q.photons, volume_photons=F.EMIT_CAP * stored,
-                 volume_stored=stored, aim=F.FIGURE_AIM, k=q.k, radius=q.radius_mm)
-        s["surface_radius"] = q.surface_radius_mm
+        s = F.disc_settings(q)
+        if a.stored:
+            s.update(volume_photons=F.EMIT_CAP * a.stored, volume_stored=a.stored)
     for key in ("spp", "k", "radius", "surface_radius"):
         if getattr(a, key) is not None:
             s[key] = getattr(a, key)
-    return {k: v for k, v in s.items() if v is not None}
+    return s
 
 
 def main() -> None:
@@ -119,7 +118,8 @@ def main() -> None:
         print(f"  {q.resolution[0]}x{q.resolution[1]}, {len(bands)} bands, "
               f"{settings['volume_stored']} volume photons stored, k {settings['k']}, "
               f"spp {settings['spp']}, radius <= {settings['radius']} mm, surface radius <= "
-              f"{settings.get('surface_radius', settings['radius'])} mm")
+              f"{settings['surface_radius']} mm")
+        divisor, _, white = colour_inputs(sc, bands)
         passes = {"band": False, "spectral": True}
         for spectral in (passes[p] for p in a.passes.split(",")):
             c0, t0 = time.process_time(), time.perf_counter()
@@ -127,7 +127,6 @@ def main() -> None:
                          correlated_bands=True, spectral_photons=spectral, progress=False,
                          **settings)
             wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-            divisor, _, white = colour_inputs(sc, bands)
             name = "spectral photons" if spectral else "band by band"
             print(f"  {name}: {wall:.0f} s wall, {cpu:.0f} CPU-s")
             for n, (x0, y0, x1, y1) in boxes.items():

@@ -155,15 +155,21 @@ def match_enamel_scale(target_tt: float, thickness_mm: float, enamel) -> float:
     return math.exp(0.5 * (lo + hi))
 
 
+def disc_settings(quality: Quality) -> dict:
+    """The figures' render settings at ``quality``: the disc scenes' (Fig. 3, Fig. 4, the
+    crop); the teeth scenes override them with :func:`_teeth_settings`."""
+    return dict(spp=quality.spp, photons=quality.photons,
+                volume_photons=EMIT_CAP * quality.volume_photons,
+                volume_stored=quality.volume_photons, aim=FIGURE_AIM, k=quality.k,
+                radius=quality.radius_mm, surface_radius=quality.surface_radius_mm)
+
+
 def _render_figure(name: str, scene: dict, out: Path, quality: Quality, integrator: str = "vpm",
                    regions: dict | None = None, extra: dict | None = None,
                    bands=PAPER_BANDS, white: float | None = None, **overrides) -> dict:
     sc = scene_from_dict(scene)
     t0 = time.perf_counter()
-    settings = dict(spp=quality.spp, photons=quality.photons,
-                    volume_photons=EMIT_CAP * quality.volume_photons,
-                    volume_stored=quality.volume_photons, aim=FIGURE_AIM, k=quality.k,
-                    radius=quality.radius_mm, surface_radius=quality.surface_radius_mm)
+    settings = disc_settings(quality)
     settings.update(overrides)
     if integrator in PATH_TRACERS:
         for key in ("volume_photons", "volume_stored", "aim", "photons", "k", "radius",

@@ -162,10 +162,9 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     k, radius [mm], surface_radius [mm] (the surface map's; default radius), step [mm],
     max_depth, passes, alpha, final_gather, kernel_layer (0 = the paper's spherical kernel),
     kernel_clip (clip the layer kernel by every face, not only the camera ray's entry and
-    exit planes), pass_index (render pass p of a progressive
-    render: its own photon maps and paths, the pixels' sub-pixel sequence continued where
-    pass p − 1 stopped; the mean of passes 0..N−1 is what ``dentalux render --passes N``
-    shows).
+    exit planes), pass_index (render pass p of a progressive render: its own photon maps
+    and paths, the pixels' sub-pixel sequence continued where pass p − 1 stopped; the mean
+    of passes 0..N−1 is what ``dentalux render --passes N`` shows).
     progress: True (a bar on stderr), False, None (a bar when stderr is a terminal) or a
     callable ``progress(done, total)``; an exception it raises stops the render and
     propagates. Sizes and counts are checked first (docs/limits.md): threads 1 ... 4 x the
