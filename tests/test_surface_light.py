@@ -31,14 +31,13 @@ def test_light_under_the_raised_disc_matches_volpath():
     truth = render(sc, integrator="volpath-nee", bands=F.PAPER_BANDS, spp=32768, seed=7,
                    correlated_bands=True, progress=False).radiance.reshape(-1, 3)
     t, t_se = truth.mean(0), truth.std(0, ddof=1) / np.sqrt(len(truth))
-    paper = F.QUALITIES["paper"]
-    # the volume maps do not light the spot: a small volume budget keeps the test short,
-    # while the surface map holds all `photons` photons' light as in the figure
+    # the paper figures' settings; the volume maps do not light the spot, so a small volume
+    # budget keeps the test short, while the surface map holds all `photons` photons' light
+    settings = {**F.disc_settings(F.QUALITIES["paper"]), "spp": 4,
+                "volume_photons": 20_000_000, "volume_stored": 1_000_000}
     means = np.array([
         render(sc, integrator="vpm", bands=F.PAPER_BANDS, seed=seed, correlated_bands=True,
-               progress=False, spp=4, photons=paper.photons, volume_photons=20_000_000,
-               volume_stored=1_000_000, aim=F.FIGURE_AIM, k=paper.k, radius=paper.radius_mm,
-               surface_radius=paper.surface_radius_mm).radiance.reshape(-1, 3).mean(0)
+               progress=False, **settings).radiance.reshape(-1, 3).mean(0)
         for seed in range(1, 9)])
     m, m_se = means.mean(0), means.std(0, ddof=1) / np.sqrt(len(means))
     print(f"\nvpm / volpath-nee per band: {np.round(m / t, 4)} "
