@@ -61,7 +61,7 @@ def settings_for(fig: str, q, a) -> dict:
     """The figure's own settings (figures._render_figure, figures._teeth_settings), with the
     options given on the command line in their place."""
     if fig == "fig5":
-        s = dict(photons=q.photons, **F._teeth_settings(q))
+        s = F._teeth_settings(q)
         s["volume_stored"] = a.stored or s["volume_stored"]
     else:
         s = F.disc_settings(q)

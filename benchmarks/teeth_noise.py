@@ -47,7 +47,7 @@ def main() -> None:
     for seed in range(1, max(a.seeds, 2) + 1):
         c0 = time.process_time()
         res = render(sc, integrator="vpm", bands=bands, seed=seed, correlated_bands=True,
-                     photons=q.photons, progress=False, **settings)
+                     progress=False, **settings)
         cpus.append(time.process_time() - c0)
         rel = res.radiance / divisor / tile["white"]
         labs.append({name: np.array([cs.spectrum_to_Lab(p, bands) for p in

@@ -49,6 +49,8 @@ class Quality:
     name: str
     resolution: tuple[int, int]
     spp: int
+    # Photons emitted for the surface map (`photons`): the volume pass's first this many,
+    # topped up by a surface pass where it emits fewer (docs/render-contract.md).
     photons: int
     # Volume photons stored per band in the disc scenes (the paper counts its 100 M photons as
     # collected, i.e. stored), half of them aimed at the discs (`aim` 0.5); at most
@@ -72,6 +74,10 @@ class Quality:
     teeth_volume_stored: int = 0
     # Photons per volume estimate in the teeth scenes.
     teeth_k: int = 400
+    # Surface photons emitted in the teeth scenes: their volume pass emits only about
+    # 27 000 photons per million it stores in the teeth (540 nm), 2.7 M at the paper's
+    # 100 M, so more than that would add a surface pass.
+    teeth_photons: int = 1_000_000
     # Largest gathering radius of the surface photon map [mm], every scene: the media's
     # radii (tenths of a millimetre) left the light under the raised disc and on Fig. 5's
     # walls a few photons per estimate; 2 mm is above the k-th neighbour's distance there
@@ -90,8 +96,12 @@ QUALITIES = {
     # (benchmarks/chroma_noise.py, docs/figures.md "Photon counts")
     "preview": Quality("preview", (320, 240), 4, 1_000_000, 16_000_000, 0.3, (96, 72), 8192, 200,
                        0.3, 100_000_000, 1.0, 8, teeth_volume_stored=16_000_000),
-    # the paper's photon counts: 100 M volume photons, 1 M global photons
-    "paper": Quality("paper", (512, 384), 16, 1_000_000, 100_000_000, 0.15, (192, 144), 16384,
+    # the paper's 100 M volume photons; 4 M surface photons instead of its 1 M global ones:
+    # they are the volume pass's first 4 M photons (it emits about 9 M to store 100 M in the
+    # discs), so they cost no tracing, and at k 800 the paper's 1 M left the light under the
+    # raised disc 5 % low at 450 nm, a k-NN blur that 4 M removes (docs/figures.md, "The
+    # surface map's photon count")
+    "paper": Quality("paper", (512, 384), 16, 4_000_000, 100_000_000, 0.15, (192, 144), 16384,
                      800, 0.15, 1_000_000_000, 0.5, 16, teeth_volume_stored=100_000_000),
 }
 
@@ -229,7 +239,8 @@ def cornell_teeth_scene(quality: Quality) -> dict:
 
 
 def _teeth_settings(quality: Quality) -> dict:
-    return {"volume_photons": quality.teeth_volume_photons, "aim": FIGURE_AIM,
+    return {"photons": quality.teeth_photons, "volume_photons": quality.teeth_volume_photons,
+            "aim": FIGURE_AIM,
             "volume_stored": quality.teeth_volume_stored, "radius": quality.teeth_radius_mm,
             "surface_radius": quality.surface_radius_mm, "spp": quality.teeth_spp,
             "k": quality.teeth_k}
@@ -282,7 +293,7 @@ def white_tile(scene: dict, regions: dict, quality: Quality, z_mm: float = -3.5)
                         "u": [60.0, 0.0, 0.0], "v": [0.0, 60.0, 0.0], "surface": "white_tile"})
     sc = scene_from_dict(d)
     result = render(sc, integrator="pm", bands=PAPER_BANDS, seed=2, spp=quality.teeth_spp,
-                    photons=quality.photons // 4, progress=False)
+                    photons=quality.teeth_photons // 4, progress=False)
     divisor, _, _ = colour_inputs(sc, PAPER_BANDS)
     rel = result.radiance / divisor
     values = [rel[y0:y1, x0:x1].mean(axis=(0, 1)) for x0, y0, x1, y1 in regions.values()]
@@ -353,7 +364,7 @@ def crown_translucency(quality: Quality, half_mm: float = 0.8, seed: int = 1,
         d["surfaces"]["backdrop"] = surface
         sc = scene_from_dict(d)
         result = render(sc, integrator="vpm", bands=bands, seed=seed, correlated_bands=True,
-                        photons=quality.photons, progress=False, **_teeth_settings(quality))
+                        progress=False, **_teeth_settings(quality))
         divisor, _, _ = colour_inputs(sc, bands)
         cubes[backdrop] = result.radiance / divisor / tile["white"]
     wl = np.asarray(bands)
