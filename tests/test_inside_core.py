@@ -122,3 +122,42 @@ def test_far_meshes_are_not_serialised_for_the_checks_and_the_json_is_unchanged(
     assert sc._shape_texts[0] is None  # the camera and the light are outside its bounds
     assert sc.to_json(540.0).endswith(
         ',"shapes":' + json.dumps(sc._shapes, separators=(",", ":"), default=to_plain) + "}")
+
+
+def test_a_seamed_dielectric_mesh_renders_as_the_closed_one(tmp_path):
+    # the core judges closedness for Python's check (_core.mesh_topology) and for the render
+    # alike, on merged positions: the seamed cube (open by index) is the same solid
+    from dentalux.render import render
+
+    (tmp_path / "cube.obj").write_text(cube_obj())
+    (tmp_path / "seam.obj").write_text(cube_obj(seam=True))
+    place = {"scale": 8.0, "translate": [-4, -4, -4]}
+    images = []
+    for name in ("cube.obj", "seam.obj"):
+        floor = {"type": "quad", "corner": [-20, -20, -5], "u": [40, 0, 0], "v": [0, 40, 0],
+                 "surface": "white"}
+        d = scene([{"type": "mesh", "file": name, "inside": "glass", "transform": place}, floor])
+        d["camera"]["resolution"] = [8, 6]
+        sc = scene_from_dict(d, base_dir=tmp_path)
+        images.append(render(sc, integrator="path", bands=[540.0], spp=2, seed=3,
+                             progress=False).radiance)
+    assert images[0].max() > 0
+    assert np.array_equal(images[0], images[1])
+
+
+def test_open_or_misoriented_dielectric_meshes_are_refused_with_the_core_counts(tmp_path):
+    lines = cube_obj().splitlines(True)
+    (tmp_path / "open.obj").write_text("".join(lines[:-2]))
+    flipped = lines[:-1] + ["f 4 8 5\n"]  # the last triangle wound the wrong way
+    (tmp_path / "flipped.obj").write_text("".join(flipped))
+    for name, message in (("open.obj", r"^shapes\[0\]: the mesh is open \(not watertight: 4"),
+                          ("flipped.obj", r"inconsistently oriented \(3 edges")):
+        d = scene([{"type": "mesh", "file": name, "inside": "glass"}])
+        with pytest.raises(SceneError, match=message):
+            scene_from_dict(d, base_dir=tmp_path)
+    tetra = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+    faces = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+    assert _core.mesh_topology(tetra, faces) == ("closed", 0)
+    assert _core.mesh_topology(tetra, faces[:3]) == ("open", 3)
+    with pytest.raises(ValueError, match=r"^triangles\[0\] = \[0, 1, 3\] refers to a vertex"):
+        _core.mesh_topology([(0, 0, 0)] * 3, [(0, 1, 3)])

@@ -33,6 +33,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render::render_bands, m)?)?;
     m.add_function(wrap_pyfunction!(render::camera_project, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::shape_contains, m)?)?;
+    m.add_function(wrap_pyfunction!(geometry::mesh_topology, m)?)?;
     m.add_function(wrap_pyfunction!(render::settings_schema, m)?)?;
     m.add_function(wrap_pyfunction!(render::photons_traced, m)?)?;
     m.add_function(wrap_pyfunction!(panic_in_worker, m)?)?;

@@ -1,9 +1,10 @@
 """Triangle meshes from OBJ and PLY files (read with trimesh), as plain positions and
 triangles [mm] for the render contract.
 
-A mesh that bounds a dielectric medium must be closed and consistently oriented; one whose
-triangles all face inwards (negative enclosed volume) is flipped so that normals point out of
-the ``inside`` medium, which is the orientation the core assumes. Whether a point lies inside
+A mesh that bounds a dielectric medium must be closed and consistently oriented (the core's
+rule, :func:`check_closed`); one whose triangles all face inwards (negative enclosed volume)
+is flipped so that normals point out of the ``inside`` medium, which is the orientation the
+core assumes. Whether a point lies inside
 a mesh is the core's test (:func:`point_inside`).
 """
 
@@ -15,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dentalux import _core
 from dentalux.scene.schema import SceneError
 
 SUFFIXES = (".obj", ".ply")
@@ -65,21 +67,22 @@ def load_mesh(f: Path, path: str = "mesh.file", file: str | None = None) -> Mesh
 def check_closed(data: MeshData, path: str) -> MeshData:
     """Reject an open or inconsistently oriented mesh; flip an inward-facing one.
 
-    Closedness is judged on positions merged by coordinate, so vertices duplicated for uv
-    seams do not count as holes.
+    The core judges it (``_core.mesh_topology``), by the rule its scene decoder applies to a
+    dielectric mesh: on positions merged to 1e-8 mm, so vertices duplicated along uv seams
+    do not count as holes.
     """
-    import trimesh
-
-    merged = trimesh.Trimesh(data.positions, data.triangles, process=True)
-    if not merged.is_watertight:
+    kind, edges = _core.mesh_topology(data.positions.tolist(), data.triangles.tolist())
+    if kind == "open":
         raise SceneError(
-            f"{path}: the mesh is open (not watertight), so it cannot bound a dielectric "
-            "medium; close it or give it an opaque surface"
+            f"{path}: the mesh is open (not watertight: {edges} edges are not shared by "
+            "exactly two triangles), so it cannot bound a dielectric medium; close it or "
+            "give it an opaque surface"
         )
-    if not merged.is_winding_consistent:
+    if kind == "inconsistent":
         raise SceneError(
-            f"{path}: the mesh's triangles are inconsistently oriented, so inside and "
-            "outside are ambiguous; fix the winding (e.g. trimesh.repair.fix_winding)"
+            f"{path}: the mesh's triangles are inconsistently oriented ({edges} edges are "
+            "traversed twice in the same direction), so inside and outside are ambiguous; "
+            "fix the winding (e.g. trimesh.repair.fix_winding)"
         )
     # signed enclosed volume (divergence theorem), cheaper than trimesh's mass properties
     t = data.positions[data.triangles]

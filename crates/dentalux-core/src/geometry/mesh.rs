@@ -90,12 +90,16 @@ impl TriangleMesh {
             None => [b1, b2],
         }
     }
-    /// Closedness and orientation consistency, from directed-edge counts.
+    /// Closedness and orientation consistency, from directed-edge counts over positions
+    /// merged as in [`merged_ids`](Self::merged_ids): a file that duplicates vertices along
+    /// uv seams is closed when the solid is.
     pub fn topology(&self) -> Topology {
+        let id = self.merged_ids();
         let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(self.len() * 3);
         for t in &self.triangles {
             for k in 0..3 {
-                *directed.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+                let edge = (id[t[k] as usize], id[t[(k + 1) % 3] as usize]);
+                *directed.entry(edge).or_insert(0) += 1;
             }
         }
         let mut open = 0;
@@ -105,6 +109,7 @@ impl TriangleMesh {
             if count + back != 2 {
                 open += 1;
             } else if count != 1 {
+                // (b, a) is absent then: each such edge is met once
                 inconsistent += 1;
             }
         }
@@ -112,11 +117,23 @@ impl TriangleMesh {
             Topology::Open { bad_edges: open }
         } else if inconsistent > 0 {
             Topology::Inconsistent {
-                bad_edges: inconsistent / 2,
+                bad_edges: inconsistent,
             }
         } else {
             Topology::Closed
         }
+    }
+    /// One id per vertex, equal for positions equal on a 10⁻⁸ mm grid. The grid is trimesh's
+    /// (`tol.merge`, ties to even), with which mesh files are loaded and merged in Python.
+    fn merged_ids(&self) -> Vec<u32> {
+        let key = |x: f64| (x * 1e8).round_ties_even() as i64;
+        let mut ids: HashMap<[i64; 3], u32> = HashMap::with_capacity(self.positions.len());
+        (self.positions.iter())
+            .map(|p| {
+                let next = ids.len() as u32;
+                *ids.entry([key(p.x), key(p.y), key(p.z)]).or_insert(next)
+            })
+            .collect()
     }
     /// Signed enclosed volume [mm³] (divergence theorem); positive when normals point out.
     pub fn signed_volume(&self) -> f64 {
@@ -127,28 +144,10 @@ impl TriangleMesh {
             })
             .sum()
     }
-    /// Whether every edge is shared by exactly two triangles once positions equal to
-    /// 10⁻⁸ mm are merged, orientation aside: closed as a solid, though a file may duplicate
-    /// vertices along uv seams ([`topology`](Self::topology) counts by index). The grid is
-    /// trimesh's (`tol.merge`, ties to even), by which Python's scene checks judge a mesh
-    /// file closed, so both call the same meshes closed.
+    /// Whether every edge is shared by exactly two triangles (positions merged as in
+    /// [`topology`](Self::topology)), orientation aside: closed as a solid.
     pub fn is_watertight(&self) -> bool {
-        let key = |x: f64| (x * 1e8).round_ties_even() as i64;
-        let mut ids: HashMap<[i64; 3], u32> = HashMap::with_capacity(self.positions.len());
-        let merged: Vec<u32> = (self.positions.iter())
-            .map(|p| {
-                let next = ids.len() as u32;
-                *ids.entry([key(p.x), key(p.y), key(p.z)]).or_insert(next)
-            })
-            .collect();
-        let mut edges: HashMap<(u32, u32), u32> = HashMap::with_capacity(self.len() * 3);
-        for t in &self.triangles {
-            for k in 0..3 {
-                let (a, b) = (merged[t[k] as usize], merged[t[(k + 1) % 3] as usize]);
-                *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-            }
-        }
-        edges.values().all(|&n| n == 2)
+        !matches!(self.topology(), Topology::Open { .. })
     }
     /// Whether `p` lies strictly inside the bounds of the positions and an odd number of
     /// triangles lie on a ray from it: inside, for a watertight mesh. The ray is skewed off
@@ -266,7 +265,8 @@ mod tests {
         assert!(matches!(open.topology(), Topology::Open { bad_edges: 3 }));
         let mut bad = m.clone();
         bad.triangles[3].swap(1, 2);
-        assert!(matches!(bad.topology(), Topology::Inconsistent { .. }));
+        // the turned triangle's three edges each run the way a neighbour's does
+        assert_eq!(bad.topology(), Topology::Inconsistent { bad_edges: 3 });
         let mut f = m.clone();
         f.flip();
         assert_eq!(f.topology(), Topology::Closed);
@@ -296,8 +296,12 @@ mod tests {
         seam.positions.push(Vec3::new(0.0, 0.0, 1e-9));
         seam.triangles[0] = [4, 2, 1];
         seam.triangles[2] = [4, 3, 2];
-        assert!(matches!(seam.topology(), Topology::Open { .. }));
+        assert_eq!(seam.topology(), Topology::Closed);
         assert!(seam.is_watertight());
+        // a duplicate 1e-7 mm away is another vertex: the seam stays open
+        let mut apart = seam.clone();
+        apart.positions[4] = Vec3::new(0.0, 0.0, 1e-7);
+        assert!(matches!(apart.topology(), Topology::Open { .. }));
         // winding does not matter, a missing triangle does
         let mut bad = m.clone();
         bad.triangles[3].swap(1, 2);
