@@ -14,7 +14,7 @@ from dentalux.figures import (
 )
 
 TINY = Quality("tiny", (24, 18), 1, 2_000, 20_000, 0.5, (12, 9), 4, 16, 0.5, 500_000, 1.0, 1,
-               teeth_volume_stored=20_000, teeth_k=16)
+               teeth_volume_stored=20_000, teeth_k=16, teeth_photons=2_000)
 
 
 def test_enamel_scale_matches_the_biomaterial_transmittance():

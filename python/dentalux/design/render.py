@@ -47,8 +47,8 @@ MAX_TOTAL_MM = 2.0
 # stored volume photons and 2 samples per pixel: about 40 s on two idle cores, the rendered
 # ΔE00 uncertain by about 1.2 (docs/design.md: more photons or samples barely help, more
 # independent renders do); `quality="preview"` or "paper" is the figure's.
-DRAFT = replace(F.QUALITIES["preview"], name="draft", resolution=(120, 90), photons=200_000,
-                teeth_volume_stored=8_000_000, teeth_spp=2)
+DRAFT = replace(F.QUALITIES["preview"], name="draft", resolution=(120, 90),
+                teeth_photons=200_000, teeth_volume_stored=8_000_000, teeth_spp=2)
 QUALITIES = {"draft": DRAFT, **F.QUALITIES}
 
 
@@ -170,8 +170,8 @@ def render_crown(layers, out, substrate: str = "dentin", cement=None, quality="d
     scaling = F.lower_anisotropy(scene, q, wl)  # the natural tooth's enamel and dentin
     sc = scene_from_dict(scene)
     runs = [render(sc, integrator="vpm", bands=wl, seed=seed + i, correlated_bands=True,
-                   photons=q.photons, threads=threads, progress=progress,
-                   **F._teeth_settings(q)) for i in range(repeats)]
+                   threads=threads, progress=progress, **F._teeth_settings(q))
+            for i in range(repeats)]
     result = replace(runs[0], radiance=np.mean([r.radiance for r in runs], axis=0))
     divisor, _, _ = colour_inputs(sc, wl)
     m = _measure([r.radiance / divisor / tile["white"] for r in runs], regions, wl, seed)
