@@ -9,12 +9,7 @@ from rich.console import Console
 from rich.table import Table
 
 from dentalux import instrument as instruments
-
-
-def _bands(spec: str):
-    from dentalux.cli.shade import _bands as shade_bands
-
-    return shade_bands(spec)
+from dentalux.cli import measure_options
 
 
 def design_command(
@@ -62,7 +57,7 @@ def design_command(
 
         check_path(plot, len(layer))
     res = optimise(target, layer, total=total, substrate=substrate, cement=cement,
-                   instrument=instrument, bands=_bands(bands), target_tp=target_tp,
+                   instrument=instrument, bands=measure_options.bands(bands), target_tp=target_tp,
                    photons=photons, verify_photons=verify_photons, seed=seed,
                    designs=designs, nodes=nodes, threads=threads,
                    progress=False if as_json else None)

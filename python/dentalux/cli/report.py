@@ -8,7 +8,8 @@ from pathlib import Path
 
 import typer
 
-from dentalux import dental
+from dentalux.cli import measure_options as mo
+from dentalux.cli.measure_options import DEFAULTS
 
 
 def _command() -> str | None:
@@ -29,20 +30,16 @@ def report_command(
                                    "(default: that of `dentalux shade`)"),
     match: str = typer.Option(None, help="the nearest tabs of a shade guide (as `shade "
                               "--match`)"),
-    bands: str = typer.Option("full", help="'full' (380-780 nm/10 nm), 'full:STEP', 'paper' "
-                              "or a comma-separated nm list"),
-    backing_black: float = typer.Option(None, help="black backing reflectance in [0, 1] "
-                                        "(default: the instrument's, else 0)"),
-    backing_white: float = typer.Option(None, help="white backing reflectance in [0, 1] "
-                                        "(default: the instrument's, else 0.9)"),
-    contact: float = typer.Option(None, help="optical contact: coupling medium index (>= 1); "
-                                  "default the instrument's (an air gap)"),
-    photons: int = typer.Option(dental.DEFAULT_PHOTONS, help="photons per band and run"),
-    seed: int = typer.Option(1, help="random seed"),
-    estimator: str = typer.Option("weighted", help="weighted | analog"),
-    observer: str = typer.Option("2", help="'2' (CIE 1931) or '10' (CIE 1964)"),
-    illuminant: str = typer.Option("D65", help="illuminant (colour-science name)"),
-    threads: int = typer.Option(None, help="worker threads (default: all cores)"),
+    bands: mo.Bands = DEFAULTS["bands"],
+    backing_black: mo.BackingBlack = None,
+    backing_white: mo.BackingWhite = None,
+    contact: mo.Contact = None,
+    photons: mo.Photons = DEFAULTS["photons"],
+    seed: mo.Seed = DEFAULTS["seed"],
+    estimator: mo.Estimator = DEFAULTS["estimator"],
+    observer: mo.Observer = DEFAULTS["observer"],
+    illuminant: mo.Illuminant = DEFAULTS["illuminant"],
+    threads: mo.Threads = None,
     tp_thicknesses: str = typer.Option(None, help="comma-separated thicknesses [mm] of the "
                                        "TP-vs-thickness chart (default 0.25-2 x --thickness)"),
     figure: Path = typer.Option(None, help="an image (.png/.jpg) to embed"),
@@ -51,7 +48,6 @@ def report_command(
 ) -> None:
     """One HTML file: the `shade --json` numbers, ΔE00 verdict, charts and provenance."""
     from dentalux import report
-    from dentalux.cli.shade import _bands
 
     ts = None
     if tp_thicknesses is not None:
@@ -63,7 +59,7 @@ def report_command(
     report.check_out(out)  # refuse a bad --out before any photon is traced
     path = report.write(out, materials, thickness, against=against, instrument=instrument,
                         match=match, tp_thicknesses=ts, figure=figure, render=render,
-                        command=_command(), bands=_bands(bands),
+                        command=_command(), bands=mo.bands(bands),
                         backing_black=backing_black, backing_white=backing_white,
                         contact=contact, photons=photons, seed=seed, estimator=estimator,
                         observer=observer, illuminant=illuminant, threads=threads)

@@ -7,22 +7,9 @@ from rich.console import Console
 from rich.table import Table
 
 from dentalux import dental, instrument
+from dentalux.cli import measure_options as mo
+from dentalux.cli.measure_options import DEFAULTS
 from dentalux.outputs import dumps_strict
-from dentalux.spectra import full_bands
-
-
-def _bands(spec: str):
-    if spec in ("full", "paper"):
-        return spec
-    if spec.startswith("full:"):  # full:STEP, a 380-780 nm sweep every STEP nm
-        try:
-            return full_bands(step=float(spec[5:]))
-        except ValueError:
-            raise ValueError(f"--bands = {spec!r}: full:STEP needs a step > 0 [nm]") from None
-    try:
-        return [float(x) for x in spec.split(",") if x.strip()]
-    except ValueError:
-        raise ValueError(f"--bands = {spec!r}: 'full', 'paper' or comma-separated nm") from None
 
 
 def shade_command(
@@ -37,26 +24,22 @@ def shade_command(
     illuminated_diameter: float = typer.Option(None, help="override: lit spot diameter [mm]"),
     viewed_diameter: float = typer.Option(None, help="override: viewed window diameter [mm]"),
     geometry: str = typer.Option(None, help="override: " + "|".join(instrument.GEOMETRIES)),
-    bands: str = typer.Option("full", help="'full' (380-780 nm/10 nm), 'full:STEP', 'paper' "
-                              "or a comma-separated nm list"),
-    backing_black: float = typer.Option(None, help="black backing reflectance in [0, 1] "
-                                        "(default: the instrument's)"),
-    backing_white: float = typer.Option(None, help="white backing reflectance in [0, 1] "
-                                        "(default: the instrument's)"),
-    contact: float = typer.Option(None, help="optical contact: coupling medium index (>= 1); "
-                                  "default the instrument's (an air gap)"),
+    bands: mo.Bands = DEFAULTS["bands"],
+    backing_black: mo.BackingBlack = None,
+    backing_white: mo.BackingWhite = None,
+    contact: mo.Contact = None,
     match: str = typer.Option(None, help="report the nearest tabs of a shade guide: "
                               "vita-classical | vita-3d-master"),
     layer: list[str] = typer.Option(None, help="MATERIAL:THICKNESS, repeated top to bottom: "
                                     "a layered specimen instead of MATERIAL"),
     substrate: str = typer.Option(None, help="substrate under the --layer stack "
                                   "(see `dentalux design --help`)"),
-    photons: int = typer.Option(dental.DEFAULT_PHOTONS, help="photons per band and run"),
-    seed: int = typer.Option(1, help="random seed"),
-    estimator: str = typer.Option("weighted", help="weighted | analog"),
-    observer: str = typer.Option("2", help="'2' (CIE 1931) or '10' (CIE 1964)"),
-    illuminant: str = typer.Option("D65", help="illuminant (colour-science name)"),
-    threads: int = typer.Option(None, help="worker threads (default: all cores)"),
+    photons: mo.Photons = DEFAULTS["photons"],
+    seed: mo.Seed = DEFAULTS["seed"],
+    estimator: mo.Estimator = DEFAULTS["estimator"],
+    observer: mo.Observer = DEFAULTS["observer"],
+    illuminant: mo.Illuminant = DEFAULTS["illuminant"],
+    threads: mo.Threads = None,
     as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
 ) -> None:
     """CIELAB over black/white and in transmission, TP, TP00, CR, OP as an instrument reads
@@ -80,7 +63,7 @@ def shade_command(
         raise ValueError("MATERIAL: missing (or give --layer MATERIAL:THICKNESS)")
     elif substrate is not None:
         raise ValueError("--substrate goes with --layer")
-    kw = dict(bands=_bands(bands), backing_black=backing_black, backing_white=backing_white,
+    kw = dict(bands=mo.bands(bands), backing_black=backing_black, backing_white=backing_white,
               contact=contact, photons=photons, seed=seed, estimator=estimator,
               observer=observer, illuminant=illuminant, threads=threads,
               progress=False if as_json else None)

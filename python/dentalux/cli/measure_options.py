@@ -1,0 +1,46 @@
+"""The options of the commands that simulate an instrument's reading of a specimen
+(`shade`, `report`): each written once here, with the default of
+:func:`dentalux.dental.metrics` for the same argument."""
+
+from __future__ import annotations
+
+import inspect
+from typing import Annotated
+
+import typer
+
+from dentalux import dental
+from dentalux.spectra import full_bands
+
+DEFAULTS = {name: p.default for name, p in inspect.signature(dental.metrics).parameters.items()}
+
+Bands = Annotated[str, typer.Option(help="'full' (380-780 nm/10 nm), 'full:STEP', 'paper' or a "
+                                         "comma-separated nm list")]
+BackingBlack = Annotated[float, typer.Option(help="black backing reflectance in [0, 1] "
+                                                  "(default: the instrument's; 0 for 'infinite')")]
+BackingWhite = Annotated[float, typer.Option(help="white backing reflectance in [0, 1] "
+                                                  "(default: the instrument's; 0.9 for "
+                                                  "'infinite')")]
+Contact = Annotated[float, typer.Option(help="optical contact: coupling medium index (>= 1); "
+                                             "default the instrument's (an air gap)")]
+Photons = Annotated[int, typer.Option(help="photons per band and run")]
+Seed = Annotated[int, typer.Option(help="random seed")]
+Estimator = Annotated[str, typer.Option(help="weighted | analog")]
+Observer = Annotated[str, typer.Option(help="'2' (CIE 1931) or '10' (CIE 1964)")]
+Illuminant = Annotated[str, typer.Option(help="illuminant (colour-science name)")]
+Threads = Annotated[int, typer.Option(help="worker threads (default: all cores)")]
+
+
+def bands(spec: str):
+    """The bands ``--bands`` names: 'full', 'paper', a 380-780 nm sweep or a list [nm]."""
+    if spec in ("full", "paper"):
+        return spec
+    if spec.startswith("full:"):  # full:STEP, a 380-780 nm sweep every STEP nm
+        try:
+            return full_bands(step=float(spec[5:]))
+        except ValueError:
+            raise ValueError(f"--bands = {spec!r}: full:STEP needs a step > 0 [nm]") from None
+    try:
+        return [float(x) for x in spec.split(",") if x.strip()]
+    except ValueError:
+        raise ValueError(f"--bands = {spec!r}: 'full', 'paper' or comma-separated nm") from None
