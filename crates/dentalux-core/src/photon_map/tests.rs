@@ -424,6 +424,40 @@ fn query_throughput() {
             knn / q as f64 * 1e6
         );
     }
+    // the camera pass's volume estimate at the paper's k: the k-NN query, then the layer
+    // kernel's phase-weighted sum (HG g = 0.75) over a face 0.2 mm above each point
+    let (k, q) = (800usize, 50_000);
+    let r_max = 2.0 * (3.0 * k as f64 * 1000.0 / (4.0 * PI * n as f64)).cbrt();
+    let hg = PhaseFunction::HenyeyGreenstein { g: 0.75 };
+    let mut nb = Neighbours::new();
+    let points: Vec<Vec3> = {
+        let mut s = Stream::new(33, 0, 0);
+        (0..q)
+            .map(|_| Vec3::new(s.uniform(), s.uniform(), s.uniform()) * 8.0 + Vec3::splat(1.0))
+            .collect()
+    };
+    let t = std::time::Instant::now();
+    for &x in &points {
+        map.knn(x, k, r_max, &mut nb);
+    }
+    let knn = t.elapsed().as_secs_f64() / q as f64;
+    let t = std::time::Instant::now();
+    let mut sum = 0.0;
+    for &x in &points {
+        let planes = Planes {
+            near: (x + Vec3::Z * 0.2, Vec3::Z),
+            far: None,
+            clip: None,
+        };
+        sum += (map.volume_layer_knn(x, Vec3::Z, &hg, k, r_max, 0.3, planes, &mut nb)).value;
+    }
+    let layer = t.elapsed().as_secs_f64() / q as f64;
+    println!(
+        "k = {k}: k-NN {:.2} µs, k-NN + layer estimate {:.2} µs per query (mean {:.4})",
+        knn * 1e6,
+        layer * 1e6,
+        sum / q as f64
+    );
 }
 
 /// Photons scattered uniformly (a Poisson-like process) on the plane z = 0 with density
