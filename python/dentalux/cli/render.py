@@ -74,7 +74,8 @@ def render_command(
     radius: float = typer.Option(None, help="maximum photon search radius [mm]"),
     surface_radius: float = typer.Option(
         None, help="maximum search radius of the surface photon map [mm] (default: --radius)"),
-    step: float = typer.Option(None, help="ray-marching step inside media [mm]"),
+    step: float = typer.Option(None, help="march resolution inside media [mm]: a segment gets "
+                               "half the points steps of this size would evaluate"),
     passes: int = typer.Option(None, help="progressive passes (ppm: Knaus-Zwicker passes; "
                                "others: independent seeds), one task per band and pass"),
     time_budget: float = typer.Option(None, "--time-budget",

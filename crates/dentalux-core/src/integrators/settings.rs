@@ -107,7 +107,7 @@ impl Integrator {
 /// How the camera pass estimates multiple scattering from a volume photon map.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum VolumeEstimator {
-    /// Eq. 11: ray marching with a density estimate at every step.
+    /// Eq. 11: a march along the ray with a density estimate at every point.
     Points,
     /// The beam radiance estimate: one query per ray segment (photon_map/beam.rs).
     Beam,
@@ -170,7 +170,8 @@ pub struct Settings {
     pub radius: Option<f64>,
     /// Largest gathering radius of the surface photon map [mm] ([`Settings::surface_cap`]).
     pub surface_radius: Option<f64>,
-    /// Ray-marching step [mm].
+    /// March step [mm]: how finely a camera ray's segment in a medium is sampled
+    /// (`vpm::march_points`).
     pub step: Option<f64>,
     /// Seed of every random stream.
     pub seed: u64,

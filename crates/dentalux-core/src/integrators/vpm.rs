@@ -1,12 +1,13 @@
 //! The camera pass of volume photon mapping (paper section 4, eq. 11): camera rays split at
 //! dielectric boundaries by Fresnel into reflection and refraction; inside a scattering
-//! medium they are ray marched with a jittered step Δx, adding at each step
+//! medium they are marched, at points drawn in proportion to the transmittance from the eye
+//! (their number set by the step Δx, [`march_points`]), adding at each point
 //! - single scattering from every light by a shadow ray attenuated by eq. 12 with the eq. 13
 //!   refraction correction of the in-medium distance (`vpm`; in `vpm-full` the photon map
 //!   carries single scattering instead),
 //! - multiple scattering from the medium's volume photon map, Σ p ΔΦ / (4/3 π r³),
 //!
-//! weighted by the transmittance e^(−σt s) from the eye; then the ray continues behind the
+//! integrated against the transmittance e^(−σt s) from the eye; then the ray continues behind the
 //! medium (it leaves through the far boundary, refracts and meets the checker behind a disc).
 //! Opaque Lambertian surfaces take direct light by shadow rays plus the surface photon map.
 //!
@@ -21,9 +22,9 @@
 //! | `surface_radius` [mm] | `radius`, else the 2-D analogue of its default, at most 0.1 × scene diagonal | largest gathering radius of the surface map |
 //! | `kernel_layer` | 0.3 | volume kernel: half-height of the boundary-aligned layer kernel over the gathering radius; 0 = the paper's sphere |
 //! | `kernel_clip` | true | clip the layer kernel (and the surface map's disc) by every other face within it, found by 8 rays: not only by the camera ray's entry and exit planes |
-//! | `step` Δx [mm] | per medium min(0.5 / σt, scene diagonal / 64); never below 1e-5 × diagonal | ray-marching step |
+//! | `step` Δx [mm] | per medium min(0.5 / σt, scene diagonal / 64); never below 1e-5 × diagonal | march resolution: a segment gets half the points jittered steps of Δx would evaluate (at least 2; [`march_points`]) |
 //! | `light_strata` (VpmParams only) | 3 | an area light's direct light on a surface: 3 × 3 stratified samples |
-//! | `map_threshold` (VpmParams only) | 0.3 | below this eye transmittance a march step (shadow rays and map query) is evaluated with probability T / 0.3 (weight 0.3 / T, systematic sampling along the ray) |
+//! | `map_threshold` (VpmParams only) | 0.3 | in [`march_points`]' count: a step whose eye transmittance T is below this counts T / 0.3 |
 //!
 //! Noise and speed on the Fig. 3 scene: docs/vpm-convergence.md ("Camera-pass noise and
 //! speed"), measured by the ignored test `fig3_noise_budget`.
@@ -59,6 +60,33 @@ pub const DEFAULT_LIGHT_STRATA: u32 = 3;
 /// Single-scattering points per camera-ray segment of the beam estimate (`vpm` mode).
 const SINGLE_SAMPLES: u32 = 8;
 
+/// Points of the camera pass's march over a segment of length `t_end` [mm] in a medium of
+/// extinction `sigma_t` [1/mm] (> 0): half the steps that jittered steps of `step` [mm] would
+/// evaluate, rounded, at least 2, where a step whose transmittance from the eye T is below
+/// `threshold` counts T / `threshold` (the steps' own sampling before transmittance
+/// stratification; each stratified point counts about twice: Fig. 3's discs showed less
+/// noise with 2 points than with the 4.3 such steps, docs/vpm-convergence.md). So the step
+/// sets how finely an optically thin segment is sampled along its length.
+pub fn march_points(sigma_t: f64, t_end: f64, step: f64, threshold: f64) -> u32 {
+    let n = (t_end / step).ceil().max(1.0);
+    let a = (-sigma_t * step).exp(); // transmittance over one step
+    let t0 = (-0.5 * sigma_t * step).exp(); // at the first step's middle
+    let expected = if threshold <= 0.0 {
+        n
+    } else {
+        // steps i < full have T_i = t0 aⁱ ≥ threshold; the rest count T_i / threshold
+        let full = ((threshold / t0).ln() / a.ln()).floor() + 1.0;
+        let full = if a < 1.0 { full.clamp(0.0, n) } else { n };
+        let tail = if a < 1.0 && full < n {
+            t0 * (a.powf(full) - a.powf(n)) / ((1.0 - a) * threshold)
+        } else {
+            0.0
+        };
+        full + tail
+    };
+    ((0.5 * expected).round() as u32).clamp(2, 1 << 16)
+}
+
 /// Settings of the camera pass; `None` means "derive from the scene".
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VpmParams {
@@ -80,13 +108,10 @@ pub struct VpmParams {
     /// hit left the lit checker with 30 % per-sample noise at fixed pixel positions
     /// (`fig3_noise_budget`), most of the camera pass's noise.
     pub light_strata: u32,
-    /// Transmittance from the eye below which a march step is evaluated (its shadow rays
-    /// for single scattering and its map query) only with probability T / `map_threshold`
-    /// (weighted by its inverse: unbiased), the steps chosen by systematic sampling along
-    /// the ray with one uniform offset, so the number of evaluated steps per ray hardly
-    /// varies. 0 evaluates every step. The map estimates of nearby steps share most of
-    /// their photons and single scattering varies smoothly along the ray, so this trades
-    /// little noise for fewer k-NN queries and shadow rays.
+    /// Transmittance from the eye below which a step of Δx counts only T / `map_threshold`
+    /// towards a segment's number of march points ([`march_points`]); 0 counts every step.
+    /// Deep in a dense medium the light seen from the eye is faint, and the map estimates of
+    /// nearby points share most of their photons, so the points go where T is high.
     pub map_threshold: f64,
     /// Shape of the density-estimation kernel in media: 0 a sphere (the paper's); otherwise
     /// a flat cylinder along the nearer of the camera ray's entry and exit planes, half-height
@@ -409,10 +434,16 @@ impl<'a> Vpm<'a> {
         }
     }
 
-    /// ∫_0^t_end e^(−σt s) S(x(s)) ds along `ray` in `medium` by jittered steps (eq. 11):
+    /// ∫_0^t_end e^(−σt s) S(x(s)) ds along `ray` in `medium` (eq. 11's march):
     /// S = σs Σ_l L_l p (single scattering, `vpm` only) + Σ p ΔΦ / V, V the gathering sphere
     /// 4/3 π r³, or the layer kernel oriented by the nearer of the boundary planes where the
     /// ray entered and leaves the medium (`planes`: point, outward normal).
+    ///
+    /// The points are drawn in proportion to the transmittance from the eye, one in each of
+    /// [`march_points`] equal strata of 1 − e^(−σt s) over the segment: the integral is
+    /// (1 − e^(−σt t_end)) / σt times the mean of S over them (unbiased for any count). Where
+    /// the light comes from the first mean free paths, as in the dense discs and teeth, this
+    /// needs fewer density estimates than jittered steps of equal weight.
     fn march(
         &self,
         ray: &Ray,
@@ -429,40 +460,17 @@ impl<'a> Vpm<'a> {
         }
         let sigma_t = m.sigma_t();
         let setup = self.media[medium as usize];
-        let dx = setup.step;
         let map = &self.maps.volume[medium as usize];
         let wo = -ray.d;
-        let jitter = rng.uniform();
-        // systematic sampling of the steps that query the map: step i is chosen when
-        // (acc, acc + p_i] holds an integer, acc starting uniform in [0, 1): probability p_i
-        let mut acc = rng.uniform();
-        let mut weight = 1.0; // Russian-roulette weight of the march's tail
+        let n = march_points(sigma_t, t_end, setup.step, self.params.map_threshold);
+        // the segment's share of the light: ∫_0^t_end e^(−σt s) ds = absorbed / σt
+        let absorbed = -(-sigma_t * t_end).exp_m1();
+        let weight = absorbed / (sigma_t * n as f64);
         let mut sum = 0.0;
-        let mut i = 0u64;
-        loop {
-            let s = (i as f64 + jitter) * dx;
-            if s >= t_end {
-                break;
-            }
-            i += 1;
-            // the tail of the march matters little: roulette it instead of cutting it
-            if (-sigma_t * s).exp() * weight < 1e-3 {
-                if rng.uniform() >= 0.5 {
-                    break;
-                }
-                weight *= 2.0;
-            }
-            let tw = (-sigma_t * s).exp() * weight;
-            let p_map = if self.params.map_threshold > 0.0 {
-                (tw / self.params.map_threshold).min(1.0)
-            } else {
-                1.0
-            };
-            let chosen = p_map >= 1.0 || (acc + p_map).floor() > acc.floor();
-            acc += p_map;
-            if !chosen {
-                continue;
-            }
+        for j in 0..n {
+            let u = (j as f64 + rng.uniform()) / n as f64;
+            // inverse of the truncated exponential's CDF; below t_end whatever the rounding
+            let s = (-(-u * absorbed).ln_1p() / sigma_t).min(t_end * (1.0 - 1e-12));
             let x = ray.at(s);
             let mut src = 0.0;
             if self.params.mode == StoreMode::Paper {
@@ -497,7 +505,7 @@ impl<'a> Vpm<'a> {
                 sc.estimates += 1;
                 src += e.value;
             }
-            sum += tw * src / p_map * dx;
+            sum += weight * src;
         }
         sum
     }
@@ -744,4 +752,21 @@ pub fn render_with_maps(
             ..Stats::default()
         },
     ))
+}
+
+#[cfg(test)]
+mod march_tests {
+    use super::march_points;
+
+    #[test]
+    fn march_points_halve_the_steps_that_count() {
+        // a dense disc: steps of 0.5 / σt count 2 in full and 2.44 by transmittance
+        assert_eq!(march_points(7.7, 5.0, 0.5 / 7.7, 0.3), 2);
+        // a thin segment with every step counted: 12 steps, 6 points
+        assert_eq!(march_points(1e-3, 50.0, 4.4, 0.3), 6);
+        assert_eq!(march_points(7.7, 5.0, 0.5 / 7.7, 0.0), 39);
+        // never fewer than 2, never unbounded
+        assert_eq!(march_points(7.7, 1e-6, 0.5 / 7.7, 0.3), 2);
+        assert_eq!(march_points(1e-9, 1e9, 1e-3, 0.3), 1 << 16);
+    }
 }
