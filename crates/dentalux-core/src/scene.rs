@@ -135,14 +135,8 @@ impl ShapeInstance {
                 if m.is_empty() {
                     return Err(Error::InvalidInput(format!("{field}.triangles is empty")));
                 }
+                m.check_indices(&format!("{field}."))?;
                 let nv = m.positions.len();
-                for (i, t) in m.triangles.iter().enumerate() {
-                    if t.iter().any(|&k| k as usize >= nv) {
-                        return Err(Error::InvalidInput(format!(
-                            "{field}.triangles[{i}] = {t:?} refers to a vertex ≥ {nv} (the number of positions)"
-                        )));
-                    }
-                }
                 for (i, p) in m.positions.iter().enumerate() {
                     finite(&format!("positions[{i}]"), *p)?;
                 }

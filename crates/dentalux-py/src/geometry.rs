@@ -8,7 +8,6 @@ use crate::runner;
 use dentalux_core::contract::shape_contains as core_shape_contains;
 use dentalux_core::geometry::mesh::{Topology, TriangleMesh};
 use dentalux_core::geometry::Vec3;
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 /// For each world point [mm], whether it lies strictly inside the shape in `shape_json` (one
@@ -29,21 +28,12 @@ pub fn mesh_topology(
     positions: Vec<[f64; 3]>,
     triangles: Vec<[u32; 3]>,
 ) -> PyResult<(&'static str, usize)> {
-    let n = positions.len();
-    if let Some(i) = triangles
-        .iter()
-        .position(|t| t.iter().any(|&k| k as usize >= n))
-    {
-        return Err(PyValueError::new_err(format!(
-            "triangles[{i}] = {:?} refers to a vertex >= {n} (the number of positions)",
-            triangles[i]
-        )));
-    }
     let mesh = TriangleMesh {
         positions: positions.into_iter().map(Vec3::from_array).collect(),
         triangles,
         uvs: None,
     };
+    mesh.check_indices("").map_err(runner::to_py_err)?;
     Ok(match mesh.topology() {
         Topology::Closed => ("closed", 0),
         Topology::Open { bad_edges } => ("open", bad_edges),

@@ -6,6 +6,7 @@
 
 use super::shapes::LocalHit;
 use super::{Aabb, Vec3};
+use crate::error::{Error, Result};
 use std::collections::HashMap;
 
 /// An indexed triangle mesh [mm]. A triangle (a, b, c) has normal (b − a) × (c − a),
@@ -88,6 +89,18 @@ impl TriangleMesh {
                 ]
             }
             None => [b1, b2],
+        }
+    }
+    /// Refuse a triangle that refers to a vertex past the positions (`field`: the mesh's
+    /// key path, for the message); [`topology`](Self::topology) and the geometry assume none.
+    pub fn check_indices(&self, field: &str) -> Result<()> {
+        let nv = self.positions.len();
+        match (self.triangles.iter()).position(|t| t.iter().any(|&k| k as usize >= nv)) {
+            Some(i) => Err(Error::InvalidInput(format!(
+                "{field}triangles[{i}] = {:?} refers to a vertex ≥ {nv} (the number of positions)",
+                self.triangles[i]
+            ))),
+            None => Ok(()),
         }
     }
     /// Closedness and orientation consistency, from directed-edge counts over positions
