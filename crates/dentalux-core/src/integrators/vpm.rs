@@ -87,6 +87,17 @@ pub fn march_points(sigma_t: f64, t_end: f64, step: f64, threshold: f64) -> u32 
     ((0.5 * expected).round() as u32).clamp(2, 1 << 16)
 }
 
+/// The distance [mm] of point `j` of `n` drawn by the eye's transmittance over [0, `t_end`]
+/// in a medium of extinction `sigma_t`, `xi` uniform in [0, 1): with F = `absorbed` =
+/// 1 − e^(−σt t_end), s = −ln(1 − u F)/σt at u = (j + ξ)/n has density σt e^(−σt s)/F
+/// within stratum j (the inverse of the truncated exponential's CDF), kept below `t_end`
+/// whatever the rounding.
+#[inline]
+fn stratum_point(sigma_t: f64, t_end: f64, absorbed: f64, j: u32, n: u32, xi: f64) -> f64 {
+    let u = (j as f64 + xi) / n as f64;
+    (-(-u * absorbed).ln_1p() / sigma_t).min(t_end * (1.0 - 1e-12))
+}
+
 /// Settings of the camera pass; `None` means "derive from the scene".
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VpmParams {
@@ -468,9 +479,7 @@ impl<'a> Vpm<'a> {
         let weight = absorbed / (sigma_t * n as f64);
         let mut sum = 0.0;
         for j in 0..n {
-            let u = (j as f64 + rng.uniform()) / n as f64;
-            // inverse of the truncated exponential's CDF; below t_end whatever the rounding
-            let s = (-(-u * absorbed).ln_1p() / sigma_t).min(t_end * (1.0 - 1e-12));
+            let s = stratum_point(sigma_t, t_end, absorbed, j, n, rng.uniform());
             let x = ray.at(s);
             let mut src = 0.0;
             if self.params.mode == StoreMode::Paper {
@@ -558,13 +567,11 @@ impl<'a> Vpm<'a> {
         let sigma_t = m.sigma_t();
         let mut l = 0.0;
         if self.params.mode == StoreMode::Paper {
-            // F = 1 − e^(−σt T): s = −ln(1 − u F)/σt has density σt e^(−σt s)/F on [0, T]
             let f = -(-sigma_t * t_end).exp_m1();
             let n = SINGLE_SAMPLES as f64;
             for j in 0..SINGLE_SAMPLES {
-                let u = (j as f64 + rng.uniform()) / n;
-                let s = -(-u * f).ln_1p() / sigma_t;
-                let x = ray.at(s.min(t_end));
+                let s = stratum_point(sigma_t, t_end, f, j, SINGLE_SAMPLES, rng.uniform());
+                let x = ray.at(s);
                 l += f / sigma_t * self.single_scatter(x, ray.d, medium, rng, sc) / n;
             }
         }
