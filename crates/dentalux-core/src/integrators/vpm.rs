@@ -471,7 +471,6 @@ impl<'a> Vpm<'a> {
         }
         let sigma_t = m.sigma_t();
         let setup = self.media[medium as usize];
-        let map = &self.maps.volume[medium as usize];
         let wo = -ray.d;
         let n = march_points(sigma_t, t_end, setup.step, self.params.map_threshold);
         // the segment's share of the light: ∫_0^t_end e^(−σt s) ds = absorbed / σt
@@ -485,38 +484,57 @@ impl<'a> Vpm<'a> {
             if self.params.mode == StoreMode::Paper {
                 src += self.single_scatter(x, ray.d, medium, rng, sc);
             }
-            if !map.is_empty() {
-                // the nearer of the entry and exit planes orients the layer kernel
-                let depth = |p: &(Vec3, Vec3)| (p.0 - x).dot(p.1).abs();
-                let near = planes
-                    .iter()
-                    .flatten()
-                    .min_by(|a, b| depth(a).total_cmp(&depth(b)))
-                    .copied()
-                    .filter(|_| self.params.layer > 0.0);
-                let faces = |o, d, t_max| scene.first_face(o, d, t_max);
-                let clip = self.kernel_clip(&faces, rng);
-                let planes = near.map(|near| Planes {
-                    near,
-                    far: planes.iter().flatten().find(|p| **p != near).copied(),
-                    clip,
-                });
-                let (k, r, layer) = (self.params.k, setup.radius, self.params.layer);
-                let e = match (self.fixed_radius, planes) {
-                    (true, Some(pl)) => map.volume_layer_at_radius(x, wo, &m.phase, r, layer, pl),
-                    (true, None) => map.volume_sphere_at_radius(x, wo, &m.phase, r),
-                    (false, Some(pl)) => {
-                        map.volume_layer_knn(x, wo, &m.phase, k, r, layer, pl, &mut sc.nb)
-                    }
-                    (false, None) => map.volume_sphere_knn(x, wo, &m.phase, k, r, &mut sc.nb),
-                };
-                sc.radius_sum += e.radius;
-                sc.estimates += 1;
-                src += e.value;
-            }
+            src += self.map_source(x, wo, medium, planes, rng, sc);
             sum += weight * src;
         }
         sum
+    }
+
+    /// The medium's volume photon map's estimate of eq. 11's multiple-scattering source
+    /// Σ p ΔΦ / V at `x` seen along `-wo`, its kernel oriented by the nearer of `planes`
+    /// (the boundary planes where the camera ray entered and leaves the medium); 0 where the
+    /// map is empty.
+    pub(super) fn map_source(
+        &self,
+        x: Vec3,
+        wo: Vec3,
+        medium: u32,
+        planes: [Option<(Vec3, Vec3)>; 2],
+        rng: &mut Stream,
+        sc: &mut Scratch,
+    ) -> f64 {
+        let scene = self.scene;
+        let m = &scene.media[medium as usize];
+        let setup = self.media[medium as usize];
+        let map = &self.maps.volume[medium as usize];
+        if map.is_empty() {
+            return 0.0;
+        }
+        // the nearer of the entry and exit planes orients the layer kernel
+        let depth = |p: &(Vec3, Vec3)| (p.0 - x).dot(p.1).abs();
+        let near = planes
+            .iter()
+            .flatten()
+            .min_by(|a, b| depth(a).total_cmp(&depth(b)))
+            .copied()
+            .filter(|_| self.params.layer > 0.0);
+        let faces = |o, d, t_max| scene.first_face(o, d, t_max);
+        let clip = self.kernel_clip(&faces, rng);
+        let planes = near.map(|near| Planes {
+            near,
+            far: planes.iter().flatten().find(|p| **p != near).copied(),
+            clip,
+        });
+        let (k, r, layer) = (self.params.k, setup.radius, self.params.layer);
+        let e = match (self.fixed_radius, planes) {
+            (true, Some(pl)) => map.volume_layer_at_radius(x, wo, &m.phase, r, layer, pl),
+            (true, None) => map.volume_sphere_at_radius(x, wo, &m.phase, r),
+            (false, Some(pl)) => map.volume_layer_knn(x, wo, &m.phase, k, r, layer, pl, &mut sc.nb),
+            (false, None) => map.volume_sphere_knn(x, wo, &m.phase, k, r, &mut sc.nb),
+        };
+        sc.radius_sum += e.radius;
+        sc.estimates += 1;
+        e.value
     }
 
     /// σs Σ_l p L_l T_l at `x` in `medium` for a camera ray along `d`: single scattering
@@ -575,32 +593,48 @@ impl<'a> Vpm<'a> {
                 l += f / sigma_t * self.single_scatter(x, ray.d, medium, rng, sc) / n;
             }
         }
+        l + self.beam_source(ray, medium, t_end, planes, rng, sc)
+    }
+
+    /// Multiple scattering along a camera-ray segment of `t_end` in `medium` by one beam
+    /// radiance estimate (photon_map/beam.rs), its photons cut by `planes` (where the ray
+    /// entered and leaves the medium); 0 without a map or beams.
+    pub(super) fn beam_source(
+        &self,
+        ray: &Ray,
+        medium: u32,
+        t_end: f64,
+        planes: [Option<(Vec3, Vec3)>; 2],
+        rng: &mut Stream,
+        sc: &mut Scratch,
+    ) -> f64 {
+        let m = &self.scene.media[medium as usize];
         let map = &self.maps.volume[medium as usize];
-        if !map.is_empty() {
-            let Some(b) = self.beams.as_ref().map(|b| &b[medium as usize]) else {
-                return l;
-            };
-            let scene = self.scene;
-            let faces = |o, d, t_max| scene.first_face(o, d, t_max);
-            let clip = self.kernel_clip(&faces, rng);
-            let e = b.estimate(
-                map,
-                &Segment {
-                    o: ray.o,
-                    d: ray.d,
-                    t_end,
-                    entry: planes[0],
-                    exit: planes[1],
-                    sigma_t,
-                    phase: &m.phase,
-                    clip,
-                },
-            );
-            sc.estimates += 1;
-            sc.radius_sum += b.radius();
-            l += e.value;
+        let Some(b) = self.beams.as_ref().map(|b| &b[medium as usize]) else {
+            return 0.0;
+        };
+        if map.is_empty() {
+            return 0.0;
         }
-        l
+        let scene = self.scene;
+        let faces = |o, d, t_max| scene.first_face(o, d, t_max);
+        let clip = self.kernel_clip(&faces, rng);
+        let e = b.estimate(
+            map,
+            &Segment {
+                o: ray.o,
+                d: ray.d,
+                t_end,
+                entry: planes[0],
+                exit: planes[1],
+                sigma_t: m.sigma_t(),
+                phase: &m.phase,
+                clip,
+            },
+        );
+        sc.estimates += 1;
+        sc.radius_sum += b.radius();
+        e.value
     }
 
     /// Irradiance at an opaque hit from the side the ray came from: direct light by shadow
