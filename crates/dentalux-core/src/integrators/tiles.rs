@@ -80,24 +80,46 @@ pub fn render_tiles<F>(
 where
     F: Fn(&Ray, &mut Stream, &mut Scratch) -> f64 + Sync,
 {
+    let (mut images, totals) =
+        render_tiles_bands(scene, settings, control, 1, |ray, rng, sc, sum| {
+            sum[0] += radiance(ray, rng, sc);
+        })?;
+    Ok((images.swap_remove(0), totals))
+}
+
+/// [`render_tiles`] for a camera pass that measures `bands` bands at once: `radiance(ray,
+/// rng, scratch, sum)` adds each band's radiance along the camera ray to `sum[b]`. Returns
+/// one image per band. Progress counts a pixel once per band, as `bands` one-band passes
+/// would.
+pub fn render_tiles_bands<F>(
+    scene: &Scene,
+    settings: &Settings,
+    control: &Control,
+    bands: usize,
+    radiance: F,
+) -> Result<(Vec<Vec<f32>>, Totals)>
+where
+    F: Fn(&Ray, &mut Stream, &mut Scratch, &mut [f64]) + Sync,
+{
     let cam = &scene.camera;
-    let mut film = Film::new(cam.width, cam.height);
-    let tiles = film.tiles();
+    let mut films: Vec<Film> = (0..bands).map(|_| Film::new(cam.width, cam.height)).collect();
+    let tiles = films[0].tiles();
     let spp = settings.spp;
     let (film_seed, first) = film_key(settings);
-    let done: Vec<(Vec<f32>, Totals)> = tiles
+    let done: Vec<(Vec<Vec<f32>>, Totals)> = tiles
         .par_iter()
         .map(|tile: &Tile| {
             control.check()?;
             let mut rng = Stream::new(settings.seed, settings.band, tile.index);
             let mut subpixel = Stream::new(film_seed, settings.band, FILM_STREAM | tile.index);
             let mut scratch = Scratch::default();
-            let mut px = Vec::with_capacity(TILE * TILE);
+            let mut px = vec![Vec::with_capacity(TILE * TILE); bands];
+            let mut sum = vec![0.0; bands];
             for y in tile.y0..tile.y1 {
                 // a row of a tile is the longest stretch between checks: high spp stays prompt
                 control.check()?;
                 for x in tile.x0..tile.x1 {
-                    let mut sum = 0.0;
+                    sum.fill(0.0);
                     // stratified sub-pixel positions: R2 points with a random rotation
                     let shift = subpixel.uniform2();
                     for i in 0..spp {
@@ -107,12 +129,14 @@ where
                         }
                         let [jx, jy] = r2_point(first + i as u64, shift);
                         let ray = cam.ray(x as f64 + jx, y as f64 + jy);
-                        sum += radiance(&ray, &mut rng, &mut scratch);
+                        radiance(&ray, &mut rng, &mut scratch, &mut sum);
                     }
-                    px.push((sum / spp as f64) as f32);
+                    for (p, s) in px.iter_mut().zip(&sum) {
+                        p.push((s / spp as f64) as f32);
+                    }
                 }
             }
-            control.add_done(px.len() as u64);
+            control.add_done((px[0].len() * bands) as u64);
             let totals = Totals {
                 rays: scratch.rays,
                 radius_sum: scratch.radius_sum,
@@ -123,10 +147,12 @@ where
         .collect::<Result<Vec<_>>>()?;
     let mut totals = Totals::default();
     for (tile, (px, t)) in tiles.iter().zip(done) {
-        film.put(tile, &px);
+        for (film, px) in films.iter_mut().zip(&px) {
+            film.put(tile, px);
+        }
         totals.rays += t.rays;
         totals.radius_sum += t.radius_sum;
         totals.estimates += t.estimates;
     }
-    Ok((film.data, totals))
+    Ok((films.into_iter().map(|f| f.data).collect(), totals))
 }
