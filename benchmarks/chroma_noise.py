@@ -4,14 +4,15 @@ ribbon in its shadow (`--patch under`), or on Fig. 5's ceiling (`--patch ceiling
 two are lit only by the surface photon map's light. Rendered
 as the figures render them (`figures.disc_scene`, the quality's photon counts, three bands,
 correlated streams), with band-by-band photon passes and with one spectral photon pass
-(`spectral_photons`: hero-band walks, balance-heuristic powers, shared camera streams).
+(`spectral_photons`: hero-band walks, balance-heuristic powers, shared camera streams), and
+with hero-wavelength camera paths (`hero_camera`: one camera path for all bands).
 The patch is flat and evenly lit, so its spread is noise; a* and b* spread is the coloured
 speckle. Also prints each render's wall and CPU seconds (user + system of this process).
 
     .venv/bin/python benchmarks/chroma_noise.py [--figures fig3,fig4,fig5]
         [--quality preview|paper] [--patch top,under,ceiling,wall] [--half-mm 2.0]
         [--bands 450,540,605 | --bands 16] [--stored 4000000] [--resolution 320x240]
-        [--k 800] [--spp 4] [--radius 0.3] [--surface-radius 1.0] [--passes band,spectral]
+        [--k 800] [--spp 4] [--radius 0.3] [--surface-radius 1.0] [--passes band,spectral,hero,spectral-hero]
 
 ``--bands 16``: 16 bands evenly over 400-700 nm (20 nm apart) instead of the figures' three.
 """
@@ -40,6 +41,14 @@ PATCHES = {"top": ([8.0, 0.0, 10.0], 2.0, (0, 0, 1)),
            "under": ([8.6, -0.95, 0.0], 0.7, (0, 0, 1)),
            "ceiling": ([12.0, 60.0, 30.0], 5.0, (0, -1, 0)),
            "wall": ([12.0, 45.0, 60.0], 5.0, (0, 0, -1))}
+
+
+# --passes: (spectral_photons, hero_camera)
+PASSES = {"band": (False, False), "spectral": (True, False), "hero": (False, True),
+          "spectral-hero": (True, True)}
+PASS_NAMES = {"band": "band by band", "spectral": "spectral photons",
+              "hero": "band-by-band photons, hero camera paths",
+              "spectral-hero": "spectral photons, hero camera paths"}
 
 
 def scene_for(fig: str, q) -> dict:
@@ -92,7 +101,9 @@ def main() -> None:
     ap.add_argument("--surface-radius", type=float, default=None,
                     help="largest gathering radius of the surface map [mm] (figure's)")
     ap.add_argument("--passes", default="band,spectral",
-                    help="photon passes to compare: band (band by band), spectral")
+                    help="passes to compare: band (band by band), spectral (one spectral "
+                         "photon pass), hero (band-by-band photons, hero camera paths), "
+                         "spectral-hero")
     a = ap.parse_args()
     q = F.QUALITIES[a.quality]
     if a.resolution:
@@ -120,14 +131,16 @@ def main() -> None:
               f"spp {settings['spp']}, radius <= {settings['radius']} mm, surface radius <= "
               f"{settings['surface_radius']} mm")
         divisor, _, white = colour_inputs(sc, bands)
-        passes = {"band": False, "spectral": True}
-        for spectral in (passes[p] for p in a.passes.split(",")):
+        for kind in a.passes.split(","):
+            if kind not in PASSES:
+                ap.error(f"--passes {kind}: allowed {', '.join(PASSES)}")
+            spectral, hero = PASSES[kind]
             c0, t0 = time.process_time(), time.perf_counter()
             res = render(sc, integrator="vpm", bands=bands, seed=1,
-                         correlated_bands=True, spectral_photons=spectral, progress=False,
-                         **settings)
+                         correlated_bands=True, spectral_photons=spectral, hero_camera=hero,
+                         progress=False, **settings)
             wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-            name = "spectral photons" if spectral else "band by band"
+            name = PASS_NAMES[kind]
             print(f"  {name}: {wall:.0f} s wall, {cpu:.0f} CPU-s")
             for n, (x0, y0, x1, y1) in boxes.items():
                 px = (res.radiance[y0:y1, x0:x1] / divisor / white).reshape(-1, len(bands))

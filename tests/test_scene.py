@@ -549,7 +549,8 @@ def test_render_api_with_fake_core(fake_core):
                          "surface_radius": None, "step": None, "seed": 7, "band": 605,
                          "threads": None, "max_depth": 64, "passes": 1, "alpha": 0.7,
                          "final_gather": False, "kernel_layer": 0.3, "kernel_clip": True,
-                         "volume_estimator": "points", "spectral_photons": False}
+                         "volume_estimator": "points", "spectral_photons": False,
+                         "hero_camera": False}
     # red wall at 605 nm from its reflectance table
     assert scene0["surfaces"][1]["reflectance"] == pytest.approx(np.interp(
         605, [400, 550, 580, 600, 700], [0.05, 0.05, 0.2, 0.6, 0.65]))

@@ -213,23 +213,28 @@ def render_memory_bytes(width: int, height: int, bands: int, settings: dict,
     colour images per pixel, and the photon maps: at least one stored photon per photon
     emitted (the volume maps hold ``volume_stored`` where that budget is set), for one band
     at a time, or for every band at once with ``spectral_photons`` (their maps are built
-    together from the shared photons, which carry a power per band until then). A spectral
-    pass also holds every band's copy of the scene's ``texels`` image-texture pixels (a
-    band-by-band render holds one, which :func:`check_texture` counted at load)."""
+    together from the shared photons, which carry a power per band until then) or
+    ``hero_camera`` (one camera pass over every band's maps). Either also holds every band's
+    copy of the scene's ``texels`` image-texture pixels (a band-by-band render holds one,
+    which :func:`check_texture` counted at load)."""
     pixels = float(width) * float(height)
     need = pixels * (bands * PIXEL_BAND_BYTES + PIXEL_COLOUR_BYTES)
     integrator = settings.get("integrator")
+    spectral = bool(settings.get("spectral_photons")) and bands > 1
+    together = spectral or (bool(settings.get("hero_camera")) and bands > 1)
     if integrator not in ("path", "volpath", "volpath-nee"):
         photons = float(settings.get("photons") or 0)
         if integrator in VOLUME_INTEGRATORS:
             stored = settings.get("volume_stored") or settings.get("volume_photons") or 0
             photons += float(stored)
         maps = 1.0
-        if settings.get("spectral_photons") and bands > 1:
+        if spectral:
             # every band's map, and the shared photons with their B powers while they build
             maps = bands + 1 + bands * 4.0 / PHOTON_BYTES
+        elif together:
+            maps = float(bands)
         need += photons * PHOTON_BYTES * 1.05 * maps
-    if settings.get("spectral_photons") and bands > 1:
+    if together:
         need += float(texels) * TEXEL_BYTES * bands
     return need
 

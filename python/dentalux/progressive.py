@@ -293,11 +293,13 @@ def render_progressive(scene, stop: StopRule, executor=None, integrator: str | N
     settings = build_settings(sc, integrator=integrator, spp=spp, photons=photons, seed=seed,
                               threads=threads, **options)
     res = _resolution(resolution) or sc.resolution
-    if settings.get("spectral_photons") and len(band_list) > 1:
-        raise ValueError("spectral_photons = true: a progressive or distributed render runs "
-                         "one task per band and pass, which cannot share one photon pass; "
-                         "render without --passes, --time-budget, --target-rmse and "
-                         "--cluster, or without --spectral-photons")
+    for key, what, flag in (("spectral_photons", "one photon pass", "--spectral-photons"),
+                            ("hero_camera", "camera paths", "--hero-camera")):
+        if settings.get(key) and len(band_list) > 1:
+            raise ValueError(f"{key} = true: a progressive or distributed render runs one "
+                             f"task per band and pass, which cannot share {what}; render "
+                             "without --passes, --time-budget, --target-rmse and "
+                             f"--cluster, or without {flag}")
     from dentalux.limits import check_render
 
     check_render(settings, res[0], res[1], len(band_list))

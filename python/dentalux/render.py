@@ -162,7 +162,8 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     k, radius [mm], surface_radius [mm] (the surface map's; default radius), step [mm],
     max_depth, passes, alpha, final_gather, kernel_layer (0 = the paper's spherical kernel),
     kernel_clip (clip the layer kernel by every face, not only the camera ray's entry and
-    exit planes), pass_index (render pass p of a progressive render: its own photon maps
+    exit planes), spectral_photons (one photon pass for all bands), hero_camera (one camera
+    path per pixel sample for all bands, with a throughput per band), pass_index (render pass p of a progressive render: its own photon maps
     and paths, the pixels' sub-pixel sequence continued where pass p − 1 stopped; the mean
     of passes 0..N−1 is what ``dentalux render --passes N`` shows).
     progress: True (a bar on stderr), False, None (a bar when stderr is a terminal) or a
@@ -185,12 +186,14 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     w, h = res
     nb = len(band_list)
     spectral = bool(settings.get("spectral_photons")) and nb > 1
+    together = spectral or (bool(settings.get("hero_camera")) and nb > 1)
     # Bands go to the core together, except in scenes with image textures: every band's
     # surfaces carry a texture's pixels, so those bands go one at a time (one copy in memory)
-    # unless a spectral pass needs them all at once, which the memory check then counts.
+    # unless a spectral pass or hero camera paths need them all at once, which the memory
+    # check then counts.
     texels = sc.texels()
     limits.check_render(settings, w, h, nb, texels)
-    groups = [list(range(nb))] if spectral or not texels else [[b] for b in range(nb)]
+    groups = [list(range(nb))] if together or not texels else [[b] for b in range(nb)]
     # The core's progress(done) counts photons traced plus pixels finished, summed over the
     # bands of a call, photons once for a spectral pass (render.rs)
     per_pass = photons_traced(settings) * settings["passes"]

@@ -104,6 +104,12 @@ def render_command(
              "walks with balance-heuristic powers) and shared camera paths, so noise is "
              "shared between bands (less coloured speckle) and photons are traced once "
              "(default: off; docs/spectral-photons.md)"),
+    hero_camera: bool = typer.Option(
+        None, "--hero-camera/--no-hero-camera",
+        help="vpm, vpm-full, bre over several bands: one camera path per pixel sample for "
+             "all bands, with a throughput per band (hero-wavelength camera paths), instead "
+             "of one camera pass per band; holds every band's photon maps at once "
+             "(default: off; docs/spectral-photons.md)"),
     match: str = typer.Option(
         None, "--match",
         help="a shade guide (see `dentalux shade --help`): colour.json gives each measured "
@@ -138,7 +144,8 @@ def render_command(
                                    ("kernel_layer", kernel_layer),
                                    ("kernel_clip", kernel_clip),
                                    ("volume_estimator", volume_estimator),
-                                   ("spectral_photons", spectral_photons))
+                                   ("spectral_photons", spectral_photons),
+                                   ("hero_camera", hero_camera))
                if v is not None}
     common = dict(integrator=integrator, spp=spp, photons=photons, bands=band_list,
                   seed=seed, threads=threads, resolution=res,

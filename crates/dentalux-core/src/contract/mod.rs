@@ -454,6 +454,7 @@ pub fn settings_from_json(text: &str) -> R<(Settings, Option<usize>)> {
         kernel_clip: (o.opt_with("kernel_clip", |n| n.boolean())?).unwrap_or(d.kernel_clip),
         spectral_photons: (o.opt_with("spectral_photons", |n| n.boolean())?)
             .unwrap_or(d.spectral_photons),
+        hero_camera: (o.opt_with("hero_camera", |n| n.boolean())?).unwrap_or(d.hero_camera),
         volume_estimator: match o.opt("volume_estimator") {
             Some((v, p)) => VolumeEstimator::parse(Node { v, path: &p }.string()?)?,
             None => d.volume_estimator,
@@ -506,6 +507,7 @@ pub fn settings_schema() -> String {
             "kernel_clip" => json!(d.kernel_clip),
             "volume_estimator" => json!(d.volume_estimator.name()),
             "spectral_photons" => json!(d.spectral_photons),
+            "hero_camera" => json!(d.hero_camera),
             _ => Value::Null,
         }
     };
@@ -537,7 +539,7 @@ pub fn settings_schema() -> String {
         .map(|(i, name)| {
             json!({"name": name, "traces_photons": i.traces_photons(),
                    "traces_volume_photons": i.traces_volume_photons(),
-                   "shares_spectral_photons": i.shares_spectral_photons()})
+                   "shares_bands": i.shares_bands()})
         })
         .collect();
     json!({"integrators": integrators, "keys": keys, "max_passes": MAX_PASSES}).to_string()

@@ -5,7 +5,8 @@
 //! - [`photon_trace`]: the photon pass (eqs. 1–10) filling volume and surface photon maps,
 //!   its energy [`ledger`]; [`aim`] sends part of the volume pass straight at the media;
 //!   [`hero`] weighs a spectral pass's walks between its bands.
-//! - [`vpm`]: volume photon mapping's camera pass (eqs. 11–13), modes `vpm` and `vpm-full`.
+//! - [`vpm`]: volume photon mapping's camera pass (eqs. 11–13), modes `vpm` and `vpm-full`;
+//!   [`hero_camera`] runs it over every band of a render with one camera path.
 //! - [`ppm`]: probabilistic progressive photon mapping (bounded memory, consistent).
 //! - [`volpath`]: the unbiased volumetric path tracer that judges them; [`planar_nee`] lets
 //!   it connect to lights through flat refracting faces (a faster reference).
@@ -18,11 +19,13 @@
 //!
 //! Layering (no module uses one above it): `settings`, `transport`, `tiles`, `ledger` →
 //! `hero` → `direct`, `photon_trace`, `aim`, `planar_nee` → `path`, `pm`, `vpm`, `volpath` →
-//! `ppm` → `render` (tests/test_import_graph.py checks that the graph has no circle).
+//! `ppm`, `hero_camera` → `render` (tests/test_import_graph.py checks that the graph has no
+//! circle).
 
 pub mod aim;
 pub mod direct;
 pub mod hero;
+pub mod hero_camera;
 pub mod ledger;
 pub mod path;
 pub mod photon_trace;

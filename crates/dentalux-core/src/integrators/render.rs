@@ -4,7 +4,7 @@
 //! Progress (`control.done()`) counts photons traced plus pixels finished: a progress bar's
 //! total is `photons` (0 for `path`) + width × height.
 
-use super::photon_trace::trace_camera_maps_bands;
+use super::photon_trace::{trace_camera_maps, trace_camera_maps_bands};
 use super::settings::{Integrator, Settings, Stats, VolumeEstimator};
 use crate::control::Control;
 use crate::error::{Error, Result};
@@ -75,8 +75,8 @@ pub fn render_bands(
             scenes.len()
         )));
     }
-    if settings.spectral_photons && scenes.len() > 1 {
-        return render_spectral(scenes, settings, band_keys, control);
+    if (settings.spectral_photons || settings.hero_camera) && scenes.len() > 1 {
+        return render_together(scenes, settings, band_keys, control);
     }
     scenes
         .iter()
@@ -85,50 +85,79 @@ pub fn render_bands(
         .collect()
 }
 
-/// [`render_bands`] with one spectral photon pass for all bands (`integrators::hero`), then
-/// each band's camera pass over its maps, all with the streams of the first band's key (so
-/// a pixel sample follows the same path in every band where the indices agree). Photons are
-/// traced once: progress counts them once.
-fn render_spectral(
+/// [`render_bands`] with the bands' photon maps, or their camera paths, shared: one spectral
+/// photon pass for all bands (`settings.spectral_photons`, `integrators::hero`) or one
+/// photon pass per band with its own key; then one camera pass per band over its maps, or
+/// one for all bands (`settings.hero_camera`, `integrators::hero_camera`). The camera
+/// passes draw the streams of the first band's key, so a pixel sample follows the same
+/// path in every band where the indices agree. A spectral pass traces its photons once:
+/// progress counts them once.
+fn render_together(
     scenes: &[Scene],
     settings: &Settings,
     band_keys: &[u64],
     control: &Control,
 ) -> Result<Vec<(Vec<f32>, Stats)>> {
     let t0 = Instant::now();
-    let first = effective(
-        &scenes[0],
-        &Settings {
-            band: band_keys[0],
-            ..*settings
-        },
-    )?;
-    for (b, scene) in scenes.iter().enumerate().skip(1) {
-        effective(scene, &first)?;
-        // a walk starts on the hero's light: every band must have it where the hero has it
-        for (i, (l, l0)) in scene.lights.iter().zip(&scenes[0].lights).enumerate() {
-            if !l.same_place(l0) {
-                return Err(Error::InvalidInput(format!(
-                    "bands[{b}].lights[{i}] is not the light bands[0].lights[{i}] is, only \
-                     brighter or dimmer: a spectral photon pass (settings.spectral_photons) \
-                     needs every band's lights in the same places"
-                )));
+    let band = |b: usize| {
+        effective(
+            &scenes[b],
+            &Settings {
+                band: band_keys[b],
+                ..*settings
+            },
+        )
+    };
+    let first = band(0)?;
+    let full = first.integrator == Integrator::VpmFull;
+    let mode = super::vpm::store_mode(full);
+    let all = if first.spectral_photons {
+        for (b, scene) in scenes.iter().enumerate().skip(1) {
+            effective(scene, &first)?;
+            // a walk starts on the hero's light: every band must have it where the hero has it
+            for (i, (l, l0)) in scene.lights.iter().zip(&scenes[0].lights).enumerate() {
+                if !l.same_place(l0) {
+                    return Err(Error::InvalidInput(format!(
+                        "bands[{b}].lights[{i}] is not the light bands[0].lights[{i}] is, only \
+                         brighter or dimmer: a spectral photon pass (settings.spectral_photons) \
+                         needs every band's lights in the same places"
+                    )));
+                }
             }
         }
-    }
-    let full = first.integrator == Integrator::VpmFull;
-    let all = trace_camera_maps_bands(scenes, &first, super::vpm::store_mode(full), 0, control)?;
+        trace_camera_maps_bands(scenes, &first, mode, 0, control)?
+    } else {
+        (scenes.iter().enumerate())
+            .map(|(b, scene)| trace_camera_maps(scene, &band(b)?, mode, 0, control))
+            .collect::<Result<Vec<_>>>()?
+    };
+    // a spectral pass's tracing time, shared by its bands
     let traced = t0.elapsed().as_secs_f64() / scenes.len() as f64;
     let mut out = Vec::with_capacity(scenes.len());
-    // every band's camera pass draws the same random numbers (the first band's key): with
-    // the same photons and the same camera paths the bands' noise is shared
-    for (scene, maps) in scenes.iter().zip(all) {
+    if first.hero_camera {
         let t = Instant::now();
-        let (image, mut stats) = super::vpm::render_with_maps(scene, &first, control, full, &maps)?;
-        stats.seconds_total = traced + t.elapsed().as_secs_f64();
-        stats.spp = first.spp;
-        stats.extra.push(("spectral_photons".into(), 1.0));
-        out.push((image, stats));
+        let bands = super::hero_camera::render_with_maps(scenes, &first, control, full, &all)?;
+        let each = t.elapsed().as_secs_f64() / scenes.len() as f64;
+        out.extend(bands.into_iter().map(|band| (band, each)));
+    } else {
+        // every band's camera pass draws the same random numbers (the first band's key):
+        // with the same photons and the same camera paths the bands' noise is shared
+        for (scene, maps) in scenes.iter().zip(&all) {
+            let t = Instant::now();
+            let band = super::vpm::render_with_maps(scene, &first, control, full, maps)?;
+            out.push((band, t.elapsed().as_secs_f64()));
+        }
     }
+    let out = out
+        .into_iter()
+        .map(|((image, mut stats), camera)| {
+            stats.seconds_total = traced + camera;
+            stats.spp = first.spp;
+            if first.spectral_photons {
+                stats.extra.push(("spectral_photons".into(), 1.0));
+            }
+            (image, stats)
+        })
+        .collect();
     Ok(out)
 }

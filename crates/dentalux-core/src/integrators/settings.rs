@@ -95,8 +95,9 @@ impl Integrator {
     }
 
     /// Whether a multi-band render may trace one spectral photon pass for all its bands
-    /// (`settings.spectral_photons`): the one-pass volume integrators.
-    pub fn shares_spectral_photons(self) -> bool {
+    /// (`settings.spectral_photons`) and one camera path for all of them
+    /// (`settings.hero_camera`): the one-pass volume integrators.
+    pub fn shares_bands(self) -> bool {
         matches!(
             self,
             Integrator::Vpm | Integrator::VpmFull | Integrator::Bre
@@ -202,6 +203,11 @@ pub struct Settings {
     /// (hero-band walks, balance-heuristic powers: `integrators::hero`) instead of one
     /// pass per band, so every band's maps hold the same photons.
     pub spectral_photons: bool,
+    /// `vpm`, `vpm-full`, `bre` over several bands: one camera path per pixel sample for
+    /// all bands, with a throughput per band (hero-wavelength camera paths:
+    /// `integrators::hero_camera`), instead of one camera pass per band. Every band's maps
+    /// are then held at once.
+    pub hero_camera: bool,
 }
 
 impl Settings {
@@ -248,6 +254,7 @@ impl Default for Settings {
             kernel_clip: DEFAULT_CLIP,
             volume_estimator: VolumeEstimator::Points,
             spectral_photons: false,
+            hero_camera: false,
         }
     }
 }
@@ -312,7 +319,7 @@ const fn unit_interval(lo_open: bool, hi_open: bool) -> Range {
 /// Every key of the settings contract, in the order the docs and error messages list them.
 /// Defaults are [`Settings::default`]'s; `threads` (worker threads, default all cores) is
 /// read by the contract decoder, not stored in [`Settings`].
-pub const KEYS: [Key; 22] = [
+pub const KEYS: [Key; 23] = [
     key("integrator", Range::Integrator, true),
     key("spp", at_least(1), true),
     key("photons", at_least(0), true),
@@ -336,6 +343,7 @@ pub const KEYS: [Key; 22] = [
         true,
     ),
     key("spectral_photons", Range::Boolean, true),
+    key("hero_camera", Range::Boolean, true),
     key("pass_index", at_least(0), false),
     key("band", at_least(0), false),
     key("threads", at_least(1), false),
@@ -414,16 +422,21 @@ impl Settings {
                 self.integrator.name()
             )));
         }
-        if self.spectral_photons && !self.integrator.shares_spectral_photons() {
-            let allowed: Vec<&str> = (Integrator::ALL.iter())
-                .filter(|(i, _)| i.shares_spectral_photons())
-                .map(|(_, n)| *n)
-                .collect();
-            return Err(Error::InvalidInput(format!(
-                "settings.spectral_photons = true applies to {}, not to settings.integrator = {:?}",
-                allowed.join(", "),
-                self.integrator.name()
-            )));
+        for (on, name) in [
+            (self.spectral_photons, "spectral_photons"),
+            (self.hero_camera, "hero_camera"),
+        ] {
+            if on && !self.integrator.shares_bands() {
+                let allowed: Vec<&str> = (Integrator::ALL.iter())
+                    .filter(|(i, _)| i.shares_bands())
+                    .map(|(_, n)| *n)
+                    .collect();
+                return Err(Error::InvalidInput(format!(
+                    "settings.{name} = true applies to {}, not to settings.integrator = {:?}",
+                    allowed.join(", "),
+                    self.integrator.name()
+                )));
+            }
         }
         Ok(())
     }

@@ -102,7 +102,9 @@ where
     F: Fn(&Ray, &mut Stream, &mut Scratch, &mut [f64]) + Sync,
 {
     let cam = &scene.camera;
-    let mut films: Vec<Film> = (0..bands).map(|_| Film::new(cam.width, cam.height)).collect();
+    let mut films: Vec<Film> = (0..bands)
+        .map(|_| Film::new(cam.width, cam.height))
+        .collect();
     let tiles = films[0].tiles();
     let spp = settings.spp;
     let (film_seed, first) = film_key(settings);

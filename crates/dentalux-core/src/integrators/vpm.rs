@@ -35,7 +35,7 @@ use crate::geometry::{Hit, Ray, Vec3};
 use crate::integrators::photon_trace::trace_camera_maps;
 use crate::integrators::photon_trace::{PhotonMaps, StoreMode};
 use crate::integrators::settings::{Settings, Stats, VolumeEstimator, DEFAULT_CLIP, DEFAULT_LAYER};
-use crate::integrators::tiles::{render_tiles, Scratch};
+use crate::integrators::tiles::{render_tiles, Scratch, Totals};
 use crate::integrators::transport::{cross, eq13_transmittance, spawn, straight_transmittance};
 use crate::lights::Light;
 use crate::photon_map::PHOTON_BYTES;
@@ -47,18 +47,18 @@ use std::time::Instant;
 
 /// Camera-path depth up to which a mismatched boundary splits into both reflection and
 /// refraction; deeper, one of the two is chosen by Fresnel (unbiased either way).
-const SPLIT_DEPTH: u32 = 2;
+pub(super) const SPLIT_DEPTH: u32 = 2;
 /// Smallest march step as a fraction of the scene diagonal (a guard against settings that
 /// would make a camera ray take billions of steps).
 const MIN_STEP_FRACTION: f64 = 1e-5;
 /// Path weight below which Russian roulette starts.
-const RR_WEIGHT: f64 = 0.05;
+pub(super) const RR_WEIGHT: f64 = 0.05;
 /// Default of [`VpmParams::map_threshold`].
 pub const DEFAULT_MAP_THRESHOLD: f64 = 0.3;
 /// Default of [`VpmParams::light_strata`].
 pub const DEFAULT_LIGHT_STRATA: u32 = 3;
 /// Single-scattering points per camera-ray segment of the beam estimate (`vpm` mode).
-const SINGLE_SAMPLES: u32 = 8;
+pub(super) const SINGLE_SAMPLES: u32 = 8;
 
 /// Points of the camera pass's march over a segment of length `t_end` [mm] in a medium of
 /// extinction `sigma_t` [1/mm] (> 0): half the steps that jittered steps of `step` [mm] would
@@ -93,7 +93,14 @@ pub fn march_points(sigma_t: f64, t_end: f64, step: f64, threshold: f64) -> u32 
 /// within stratum j (the inverse of the truncated exponential's CDF), kept below `t_end`
 /// whatever the rounding.
 #[inline]
-fn stratum_point(sigma_t: f64, t_end: f64, absorbed: f64, j: u32, n: u32, xi: f64) -> f64 {
+pub(super) fn stratum_point(
+    sigma_t: f64,
+    t_end: f64,
+    absorbed: f64,
+    j: u32,
+    n: u32,
+    xi: f64,
+) -> f64 {
     let u = (j as f64 + xi) / n as f64;
     (-(-u * absorbed).ln_1p() / sigma_t).min(t_end * (1.0 - 1e-12))
 }
@@ -186,9 +193,9 @@ pub struct MediumSetup {
 /// A ready camera pass: scene, maps and resolved parameters.
 #[derive(Debug)]
 pub struct Vpm<'a> {
-    scene: &'a Scene,
+    pub(super) scene: &'a Scene,
     maps: &'a PhotonMaps,
-    params: VpmParams,
+    pub(super) params: VpmParams,
     /// Resolved step and radius per medium (indexed like `scene.media`).
     pub media: Vec<MediumSetup>,
     /// Resolved radius of the surface map [mm].
@@ -368,11 +375,7 @@ impl<'a> Vpm<'a> {
             }
             if sigma_t > 0.0 {
                 let exit = hit.map(|h| (h.p, if ray.d.dot(h.n) > 0.0 { h.n } else { -h.n }));
-                l += beta
-                    * match &self.beams {
-                        Some(_) => self.beam(&ray, medium, t_hit, [entry, exit], rng, sc),
-                        None => self.march(&ray, medium, t_hit, [entry, exit], rng, sc),
-                    };
+                l += beta * self.segment(&ray, medium, t_hit, [entry, exit], rng, sc);
                 beta *= (-sigma_t * t_hit).exp();
                 if beta == 0.0 {
                     return l;
@@ -442,6 +445,24 @@ impl<'a> Vpm<'a> {
                 }
                 beta = RR_WEIGHT;
             }
+        }
+    }
+
+    /// ∫_0^t_end e^(−σt s) S(x(s)) ds along `ray` in `medium`, between the planes where it
+    /// entered and leaves the medium: by the beam estimate where the beams are built, else
+    /// by eq. 11's march.
+    pub(super) fn segment(
+        &self,
+        ray: &Ray,
+        medium: u32,
+        t_end: f64,
+        planes: [Option<(Vec3, Vec3)>; 2],
+        rng: &mut Stream,
+        sc: &mut Scratch,
+    ) -> f64 {
+        match &self.beams {
+            Some(_) => self.beam(ray, medium, t_end, planes, rng, sc),
+            None => self.march(ray, medium, t_end, planes, rng, sc),
         }
     }
 
@@ -540,7 +561,7 @@ impl<'a> Vpm<'a> {
     /// σs Σ_l p L_l T_l at `x` in `medium` for a camera ray along `d`: single scattering
     /// from every light by one shadow ray each, attenuated by eq. 12 with eq. 13's
     /// refraction correction.
-    fn single_scatter(
+    pub(super) fn single_scatter(
         &self,
         x: Vec3,
         d: Vec3,
@@ -639,7 +660,7 @@ impl<'a> Vpm<'a> {
 
     /// Irradiance at an opaque hit from the side the ray came from: direct light by shadow
     /// rays (through index-matched boundaries only) plus the surface photon map.
-    fn direct_and_map_irradiance(
+    pub(super) fn direct_and_map_irradiance(
         &self,
         ray: &Ray,
         hit: &Hit,
@@ -755,6 +776,23 @@ pub fn render_with_maps(
     let (image, totals) = render_tiles(scene, settings, control, |ray, rng, sc| {
         vpm.radiance(ray, rng, sc)
     })?;
+    let seconds_camera = t0.elapsed().as_secs_f64();
+    let stats = band_stats(&vpm, maps, settings, seconds_beams, seconds_camera, totals);
+    Ok((image, stats))
+}
+
+/// The statistics of one band's camera pass `vpm` over `maps`: photon counts and powers,
+/// the resolved steps and radii per scattering medium, and the times [s].
+pub(super) fn band_stats(
+    vpm: &Vpm,
+    maps: &PhotonMaps,
+    settings: &Settings,
+    seconds_beams: f64,
+    seconds_camera: f64,
+    totals: Totals,
+) -> Stats {
+    let scene = vpm.scene;
+    let beam = vpm.beams.is_some();
     let volume_stored: usize = maps.volume.iter().map(|m| m.len()).sum();
     let mut extra = vec![
         ("volume_photons".into(), volume_stored as f64),
@@ -775,24 +813,21 @@ pub fn render_with_maps(
             extra.push((format!("radius_medium{i}"), m.radius));
         }
     }
-    Ok((
-        image,
-        Stats {
-            integrator: settings.integrator.name().into(),
-            estimator: settings.estimator().name().into(),
-            seconds_photons: maps.trace_seconds,
-            seconds_build: maps.build_seconds + seconds_beams,
-            seconds_camera: t0.elapsed().as_secs_f64(),
-            photons_emitted: maps.emitted,
-            photons_stored: maps.stored() as u64,
-            bytes_per_photon: PHOTON_BYTES as u64,
-            photon_map_bytes: maps.bytes() as u64,
-            radius: totals.mean_radius(),
-            rays: totals.rays,
-            extra,
-            ..Stats::default()
-        },
-    ))
+    Stats {
+        integrator: settings.integrator.name().into(),
+        estimator: settings.estimator().name().into(),
+        seconds_photons: maps.trace_seconds,
+        seconds_build: maps.build_seconds + seconds_beams,
+        seconds_camera,
+        photons_emitted: maps.emitted,
+        photons_stored: maps.stored() as u64,
+        bytes_per_photon: PHOTON_BYTES as u64,
+        photon_map_bytes: maps.bytes() as u64,
+        radius: totals.mean_radius(),
+        rays: totals.rays,
+        extra,
+        ..Stats::default()
+    }
 }
 
 #[cfg(test)]
