@@ -12,7 +12,8 @@ speckle. Also prints each render's wall and CPU seconds (user + system of this p
     .venv/bin/python benchmarks/chroma_noise.py [--figures fig3,fig4,fig5]
         [--quality preview|paper] [--patch top,under,ceiling,wall] [--half-mm 2.0]
         [--bands 450,540,605 | --bands 16] [--stored 4000000] [--resolution 320x240]
-        [--k 800] [--spp 4] [--radius 0.3] [--surface-radius 1.0] [--passes band,spectral,hero,spectral-hero]
+        [--k 800] [--spp 4] [--radius 0.3] [--surface-radius 1.0]
+        [--passes band,spectral,hero,spectral-hero]
 
 ``--bands 16``: 16 bands evenly over 400-700 nm (20 nm apart) instead of the figures' three.
 """

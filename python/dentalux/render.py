@@ -163,9 +163,10 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     max_depth, passes, alpha, final_gather, kernel_layer (0 = the paper's spherical kernel),
     kernel_clip (clip the layer kernel by every face, not only the camera ray's entry and
     exit planes), spectral_photons (one photon pass for all bands), hero_camera (one camera
-    path per pixel sample for all bands, with a throughput per band), pass_index (render pass p of a progressive render: its own photon maps
-    and paths, the pixels' sub-pixel sequence continued where pass p − 1 stopped; the mean
-    of passes 0..N−1 is what ``dentalux render --passes N`` shows).
+    path per pixel sample for all bands, with a throughput per band), pass_index (render
+    pass p of a progressive render: its own photon maps and paths, the pixels' sub-pixel
+    sequence continued where pass p − 1 stopped; the mean of passes 0..N−1 is what
+    ``dentalux render --passes N`` shows).
     progress: True (a bar on stderr), False, None (a bar when stderr is a terminal) or a
     callable ``progress(done, total)``; an exception it raises stops the render and
     propagates. Sizes and counts are checked first (docs/limits.md): threads 1 ... 4 x the
