@@ -20,6 +20,9 @@ use dentalux_core::scene::{Boundary, Geometry, Scene, ShapeInstance};
 use dentalux_core::surface::Surface;
 use std::f64::consts::PI;
 
+mod common;
+use common::mean_se;
+
 const VOLUME: Targets = Targets {
     volume: true,
     surface: false,
@@ -107,14 +110,6 @@ fn repeat(
     (0..reps)
         .map(|r| trace_targets(scene, emission, tag0 + r, targets))
         .collect()
-}
-
-/// Mean and standard error over independent repetitions.
-fn mean_se(v: &[f64]) -> (f64, f64) {
-    let n = v.len() as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-    (m, (var / n).sqrt())
 }
 
 /// Aimed emission (80 % into the sphere's cone) stores the same expected power in the

@@ -14,7 +14,7 @@ use dentalux_core::integrators::vpm;
 use dentalux_core::scene::Scene;
 
 mod common;
-use common::{air, medium};
+use common::{air, mean_se, medium};
 
 /// Three bands of the disc scene with band-dependent coefficients (as a tooth's differ
 /// between bands) and, with `dispersion`, band-dependent refractive indices.
@@ -50,13 +50,6 @@ fn maps(scenes: &[Scene], s: &Settings) -> Vec<PhotonMaps> {
     (scenes.iter())
         .map(|sc| trace_camera_maps(sc, s, vpm::store_mode(full), 0, &Control::new()).unwrap())
         .collect()
-}
-
-fn mean_se(v: &[f64]) -> (f64, f64) {
-    let n = v.len() as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-    (m, (var / n).sqrt())
 }
 
 const CASES: [(Integrator, VolumeEstimator); 3] = [

@@ -22,15 +22,7 @@ use dentalux_core::surface::Surface;
 use std::f64::consts::PI;
 
 mod common;
-use common::{air, camera, medium, shape};
-
-/// Mean and standard error over independent runs.
-fn mean_se(v: &[f64]) -> (f64, f64) {
-    let n = v.len() as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-    (m, (var / n).sqrt())
-}
+use common::{air, camera, mean_se, medium, shape};
 
 /// One pass of `n` photons over `scenes` (spectral for more than one) with `seed`.
 fn passes_seeded(scenes: &[Scene], n: u64, mode: StoreMode, seed: u64) -> Vec<PhotonMaps> {

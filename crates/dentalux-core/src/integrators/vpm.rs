@@ -515,7 +515,7 @@ impl<'a> Vpm<'a> {
     /// Σ p ΔΦ / V at `x` seen along `-wo`, its kernel oriented by the nearer of `planes`
     /// (the boundary planes where the camera ray entered and leaves the medium); 0 where the
     /// map is empty.
-    pub(super) fn map_source(
+    fn map_source(
         &self,
         x: Vec3,
         wo: Vec3,
@@ -614,48 +614,32 @@ impl<'a> Vpm<'a> {
                 l += f / sigma_t * self.single_scatter(x, ray.d, medium, rng, sc) / n;
             }
         }
-        l + self.beam_source(ray, medium, t_end, planes, rng, sc)
-    }
-
-    /// Multiple scattering along a camera-ray segment of `t_end` in `medium` by one beam
-    /// radiance estimate (photon_map/beam.rs), its photons cut by `planes` (where the ray
-    /// entered and leaves the medium); 0 without a map or beams.
-    pub(super) fn beam_source(
-        &self,
-        ray: &Ray,
-        medium: u32,
-        t_end: f64,
-        planes: [Option<(Vec3, Vec3)>; 2],
-        rng: &mut Stream,
-        sc: &mut Scratch,
-    ) -> f64 {
-        let m = &self.scene.media[medium as usize];
         let map = &self.maps.volume[medium as usize];
-        let Some(b) = self.beams.as_ref().map(|b| &b[medium as usize]) else {
-            return 0.0;
-        };
-        if map.is_empty() {
-            return 0.0;
+        if !map.is_empty() {
+            let Some(b) = self.beams.as_ref().map(|b| &b[medium as usize]) else {
+                return l;
+            };
+            let scene = self.scene;
+            let faces = |o, d, t_max| scene.first_face(o, d, t_max);
+            let clip = self.kernel_clip(&faces, rng);
+            let e = b.estimate(
+                map,
+                &Segment {
+                    o: ray.o,
+                    d: ray.d,
+                    t_end,
+                    entry: planes[0],
+                    exit: planes[1],
+                    sigma_t,
+                    phase: &m.phase,
+                    clip,
+                },
+            );
+            sc.estimates += 1;
+            sc.radius_sum += b.radius();
+            l += e.value;
         }
-        let scene = self.scene;
-        let faces = |o, d, t_max| scene.first_face(o, d, t_max);
-        let clip = self.kernel_clip(&faces, rng);
-        let e = b.estimate(
-            map,
-            &Segment {
-                o: ray.o,
-                d: ray.d,
-                t_end,
-                entry: planes[0],
-                exit: planes[1],
-                sigma_t: m.sigma_t(),
-                phase: &m.phase,
-                clip,
-            },
-        );
-        sc.estimates += 1;
-        sc.radius_sum += b.radius();
-        e.value
+        l
     }
 
     /// Irradiance at an opaque hit from the side the ray came from: direct light by shadow

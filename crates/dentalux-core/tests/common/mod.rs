@@ -163,3 +163,11 @@ pub fn point_in_infinite_medium(media: Vec<Medium>) -> Scene {
     )
     .unwrap()
 }
+
+/// Mean and standard error over independent estimates.
+pub fn mean_se(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
+    (m, (var / n).sqrt())
+}
