@@ -157,7 +157,10 @@ def test_open_or_misoriented_dielectric_meshes_are_refused_with_the_core_counts(
             scene_from_dict(d, base_dir=tmp_path)
     tetra = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
     faces = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
-    assert _core.mesh_topology(tetra, faces) == ("closed", 0)
-    assert _core.mesh_topology(tetra, faces[:3]) == ("open", 3)
+    assert _core.mesh_topology(tetra, faces) == ("closed", 0, False)
+    assert _core.mesh_topology(tetra, faces[:3]) == ("open", 3, False)
+    # wound inward: closed, and the core says so (Python then flips it, as the decoder would)
+    inward = [(a, c, b) for a, b, c in faces]
+    assert _core.mesh_topology(tetra, inward) == ("closed", 0, True)
     with pytest.raises(ValueError, match=r"^triangles\[0\] = \[0, 1, 3\] refers to a vertex"):
         _core.mesh_topology([(0, 0, 0)] * 3, [(0, 1, 3)])

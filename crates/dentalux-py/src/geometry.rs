@@ -22,21 +22,24 @@ pub fn shape_contains(shape_json: &str, points: Vec<[f64; 3]>) -> PyResult<Vec<b
 /// How the core judges a triangle mesh (positions [mm], vertex-index triples) as the boundary
 /// of a solid, on positions merged as for a render: ("closed", 0), ("open", the number of
 /// edges not shared by exactly two triangles) or ("inconsistent", the number of edges
-/// traversed twice in one direction). The rule a dielectric mesh must pass.
+/// traversed twice in one direction), and whether its signed volume is negative (its normals
+/// point in: the decoder turns such a dielectric mesh outward). The rule a dielectric mesh
+/// must pass.
 #[pyfunction]
 pub fn mesh_topology(
     positions: Vec<[f64; 3]>,
     triangles: Vec<[u32; 3]>,
-) -> PyResult<(&'static str, usize)> {
+) -> PyResult<(&'static str, usize, bool)> {
     let mesh = TriangleMesh {
         positions: positions.into_iter().map(Vec3::from_array).collect(),
         triangles,
         uvs: None,
     };
     mesh.check_indices("").map_err(runner::to_py_err)?;
+    let inward = mesh.signed_volume() < 0.0;
     Ok(match mesh.topology() {
-        Topology::Closed => ("closed", 0),
-        Topology::Open { bad_edges } => ("open", bad_edges),
-        Topology::Inconsistent { bad_edges } => ("inconsistent", bad_edges),
+        Topology::Closed => ("closed", 0, inward),
+        Topology::Open { bad_edges } => ("open", bad_edges, inward),
+        Topology::Inconsistent { bad_edges } => ("inconsistent", bad_edges, inward),
     })
 }

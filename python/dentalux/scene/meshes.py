@@ -69,9 +69,10 @@ def check_closed(data: MeshData, path: str) -> MeshData:
 
     The core judges it (``_core.mesh_topology``), by the rule its scene decoder applies to a
     dielectric mesh: on positions merged to 1e-8 mm, so vertices duplicated along uv seams
-    do not count as holes.
+    do not count as holes; and its signed volume says whether the mesh faces inward.
     """
-    kind, edges = _core.mesh_topology(data.positions.tolist(), data.triangles.tolist())
+    kind, edges, inward = _core.mesh_topology(data.positions.tolist(),
+                                              data.triangles.tolist())
     if kind == "open":
         raise SceneError(
             f"{path}: the mesh is open (not watertight: {edges} edges are not shared by "
@@ -84,10 +85,7 @@ def check_closed(data: MeshData, path: str) -> MeshData:
             "traversed twice in the same direction), so inside and outside are ambiguous; "
             "fix the winding (e.g. trimesh.repair.fix_winding)"
         )
-    # signed enclosed volume (divergence theorem), cheaper than trimesh's mass properties
-    t = data.positions[data.triangles]
-    volume = float(np.einsum("ij,ij->i", t[:, 0], np.cross(t[:, 1], t[:, 2])).sum()) / 6.0
-    if volume < 0:
+    if inward:  # the core's signed volume is negative: the normals point in
         return MeshData(data.positions, data.triangles[:, ::-1].copy(), data.uvs)
     return data
 
