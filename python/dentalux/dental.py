@@ -58,6 +58,8 @@ TPT, TAT = 0.62, 2.62  # ΔTP00 50:50 % perceptibility / acceptability threshold
 JSON_KEYS = ("lab_black", "lab_white", "lab_transmitted", "tp", "tp00", "cr", "op",
              "instrument", "edge_loss")
 DEFAULT_PHOTONS = 20_000
+# the bands a reading integrates by default: 380-780 nm every 10 nm (spectra.full_bands)
+DEFAULT_BANDS = "full"
 
 
 @dataclass
@@ -259,7 +261,7 @@ def _windowed_runs(specimen, wl, inst, rb_black, rb_white, contact, photons, see
     return vals, errs, loss, runs
 
 
-def read(specimen, bands="full", instrument=None, backing_black=None, backing_white=None,
+def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, backing_white=None,
          contact: float | None = None, photons: int = DEFAULT_PHOTONS, seed: int = 1,
          estimator: str = "weighted", illuminant: str = "D65", observer: str = "2",
          op_backing: str = "black", reconstruction: str = "hold", threads: int | None = None,
@@ -353,7 +355,7 @@ def read(specimen, bands="full", instrument=None, backing_black=None, backing_wh
     )
 
 
-def metrics(material, thickness: float, bands="full", backing_black=None, backing_white=None,
+def metrics(material, thickness: float, bands=DEFAULT_BANDS, backing_black=None, backing_white=None,
             contact: float | None = None, photons: int = DEFAULT_PHOTONS, seed: int = 1,
             estimator: str = "weighted", illuminant: str = "D65", observer: str = "2",
             op_backing: str = "black", reconstruction: str = "hold", threads: int | None = None,

@@ -25,7 +25,7 @@ def design_command(
                                "and substrate"),
     instrument: str = typer.Option(instruments.DEFAULT, help="instrument preset or TOML file"),
     target_tp: float = typer.Option(None, help="translucency target TP00"),
-    bands: measure_options.Bands = "full",
+    bands: measure_options.Bands = measure_options.DEFAULTS["bands"],
     photons: int = typer.Option(
         None, help="photons per band and run (default: dentalux.design.search's)"),
     verify_photons: int = typer.Option(None, help="photons for the verification (default "

@@ -133,9 +133,10 @@ def _thickness_stderr(surface: Surface, point, lab_err, target_err) -> list:
 
 
 def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
-             instrument=instruments.DEFAULT, bands="full", target_tp: float | None = None,
-             photons: int = DEFAULT_PHOTONS, verify_photons: int | None = None, seed: int = 1,
-             designs: int = 3, nodes: int | None = None, step: float | None = None,
+             instrument=instruments.DEFAULT, bands=dental.DEFAULT_BANDS,
+             target_tp: float | None = None, photons: int = DEFAULT_PHOTONS,
+             verify_photons: int | None = None, seed: int = 1, designs: int = 3,
+             nodes: int | None = None, step: float | None = None,
              spacing: float = TOLERANCE_MM, check: bool = True, illuminant: str = "D65",
              observer: str = "2", reconstruction: str = "hold", estimator: str = "weighted",
              threads: int | None = None, progress: bool | None = False) -> DesignResult:
