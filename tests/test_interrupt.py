@@ -20,6 +20,10 @@ LONG_RUNS = {
     "render-bre": [DENTALUX, "render", str(SCENES / "discs.toml"), "--out", "{tmp}",
                    "--integrator", "bre", "--spp", "100000", "--resolution", "64x48",
                    "--volume-photons", "200000"],
+    "render-hero-camera": [DENTALUX, "render", str(SCENES / "discs.toml"), "--out", "{tmp}",
+                           "--integrator", "vpm", "--hero-camera", "--bands", "450,540,605",
+                           "--spp", "100000", "--resolution", "64x48",
+                           "--volume-photons", "200000"],
 }
 
 
