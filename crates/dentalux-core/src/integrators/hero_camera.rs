@@ -96,6 +96,9 @@ impl<'a> HeroCamera<'a> {
         let max_depth = self.bands[0].params.max_depth;
         let mut l = vec![0.0; self.bands.len()];
         loop {
+            if beta.iter().all(|&w| w == 0.0) {
+                return l; // no band left to carry (a zero reflectance, an underflow)
+            }
             let hit = scene.intersect(&ray, f64::INFINITY);
             sc.rays += 1;
             let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
