@@ -118,8 +118,12 @@ impl<'a> HeroCamera<'a> {
                 let exit = hit.map(|h| plane_towards(&h, -ray.d));
                 let seg = self.segment(&ray, medium, t_hit, [entry, exit], &beta, rng, sc);
                 for (b, v) in self.bands.iter().enumerate() {
-                    l[b] += beta[b] * seg[b];
-                    beta[b] *= (-v.scene.media[medium as usize].sigma_t() * t_hit).exp();
+                    let sigma_t = v.scene.media[medium as usize].sigma_t();
+                    if sigma_t > 0.0 {
+                        // (a clear band keeps its weight, also on a ray to infinity)
+                        l[b] += beta[b] * seg[b];
+                        beta[b] *= (-sigma_t * t_hit).exp();
+                    }
                 }
                 if beta.iter().all(|&w| w == 0.0) {
                     return l;
