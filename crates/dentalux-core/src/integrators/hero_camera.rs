@@ -154,14 +154,17 @@ impl<'a> HeroCamera<'a> {
                     let cs: Vec<Crossing> = (self.bands.iter())
                         .map(|v| cross(v.scene, &hit, ray.d, inside, outside))
                         .collect();
-                    self.dielectric(&hit, &cs, &mut ray, &mut medium, &mut beta, depth, rng, sc)
-                        .map(|(next, reflected)| {
-                            for (a, r) in l.iter_mut().zip(reflected) {
-                                *a += r;
-                            }
-                            next
-                        })
-                        .unwrap_or(Next::On)
+                    self.dielectric(
+                        &hit,
+                        &cs,
+                        &mut ray,
+                        &mut medium,
+                        &mut beta,
+                        &mut l,
+                        depth,
+                        rng,
+                        sc,
+                    )
                 }
             };
             // Russian roulette on the largest band weight (unbiased; no hard depth cut)
@@ -205,10 +208,9 @@ impl<'a> HeroCamera<'a> {
         }
     }
 
-    /// A dielectric boundary with crossings `cs` (one per band): sets `ray`, `medium` and
-    /// `beta` for the path that goes on and returns where it goes, with the radiance of a
-    /// split-off reflection (per band); `None` when the boundary changes nothing but the ray
-    /// (total reflection or an index-matched pass for every band carried).
+    /// A dielectric boundary with crossings `cs` (one per band): sets `ray`, `medium` and the
+    /// band weights `beta` of the path that goes on, adds the radiance of a split-off
+    /// reflection to `l`, and says where the path goes.
     #[allow(clippy::too_many_arguments)]
     fn dielectric(
         &self,
@@ -217,37 +219,40 @@ impl<'a> HeroCamera<'a> {
         ray: &mut Ray,
         medium: &mut u32,
         beta: &mut [f64],
+        l: &mut [f64],
         depth: u32,
         rng: &mut Stream,
         sc: &mut Scratch,
-    ) -> Option<(Next, Vec<f64>)> {
+    ) -> Next {
         let scene = self.bands[0].scene;
         let carried: Vec<usize> = (0..beta.len()).filter(|&b| beta[b] > 0.0).collect();
         let c0 = cs[carried[0]];
         let shared = carried.iter().all(|&b| cs[b].refracted == c0.refracted);
         if shared && c0.refracted.is_none() {
             *ray = spawn(scene, hit, c0.reflected);
-            return None;
+            return Next::On;
         }
         if shared && carried.iter().all(|&b| !cs[b].mismatched()) {
             *ray = spawn(scene, hit, c0.refracted.unwrap_or(c0.reflected));
             *medium = c0.to;
-            return None;
+            return Next::On;
         }
-        let refract_weight = |b: usize| {
-            let c = &cs[b];
-            (1.0 - c.reflectance) * (c.eta_i / c.eta_t).powi(2)
-        };
-        let mut reflected = vec![0.0; beta.len()];
+        // radiance across the boundary scales by (η_i/η_t)²
+        let scale = |b: usize| (cs[b].eta_i / cs[b].eta_t).powi(2);
         if depth <= SPLIT_DEPTH {
             // split: reflection recursively, refraction on this path
             let w: Vec<f64> = (0..beta.len())
                 .map(|b| beta[b] * cs[b].reflectance)
                 .collect();
             let rr = spawn(scene, hit, c0.reflected);
-            reflected = self.trace(rr, c0.from, w, depth, None, rng, sc);
+            for (a, r) in l
+                .iter_mut()
+                .zip(self.trace(rr, c0.from, w, depth, None, rng, sc))
+            {
+                *a += r;
+            }
             for &b in &carried {
-                beta[b] *= refract_weight(b);
+                beta[b] *= (1.0 - cs[b].reflectance) * scale(b);
             }
         } else {
             // one branch, chosen with the carried bands' mean reflectance
@@ -257,17 +262,16 @@ impl<'a> HeroCamera<'a> {
                     beta[b] *= cs[b].reflectance / p;
                 }
                 *ray = spawn(scene, hit, c0.reflected);
-                return Some((Next::On, reflected));
+                return Next::On;
             }
             for &b in &carried {
-                let c = &cs[b];
-                beta[b] *= (1.0 - c.reflectance) / (1.0 - p) * (c.eta_i / c.eta_t).powi(2);
+                beta[b] *= (1.0 - cs[b].reflectance) / (1.0 - p) * scale(b);
             }
         }
         if shared {
             *ray = spawn(scene, hit, c0.refracted.unwrap_or(c0.reflected));
             *medium = c0.to;
-            return Some((Next::On, reflected));
+            return Next::On;
         }
         // dispersion: group the bands by their refracted direction
         let mut groups: Vec<(Vec3, u32, Vec<usize>)> = Vec::new();
@@ -283,7 +287,7 @@ impl<'a> HeroCamera<'a> {
                 None => groups.push((d, cs[b].to, vec![b])),
             }
         }
-        Some((Next::Fork(groups), reflected))
+        Next::Fork(groups)
     }
 
     /// ∫_0^t_end e^(−σt_b s) S_b(x(s)) ds for every carried band b along `ray` in `medium`:

@@ -58,7 +58,7 @@ pub const DEFAULT_MAP_THRESHOLD: f64 = 0.3;
 /// Default of [`VpmParams::light_strata`].
 pub const DEFAULT_LIGHT_STRATA: u32 = 3;
 /// Single-scattering points per camera-ray segment of the beam estimate (`vpm` mode).
-pub(super) const SINGLE_SAMPLES: u32 = 8;
+const SINGLE_SAMPLES: u32 = 8;
 
 /// Points of the camera pass's march over a segment of length `t_end` [mm] in a medium of
 /// extinction `sigma_t` [1/mm] (> 0): half the steps that jittered steps of `step` [mm] would
@@ -93,14 +93,7 @@ pub fn march_points(sigma_t: f64, t_end: f64, step: f64, threshold: f64) -> u32 
 /// within stratum j (the inverse of the truncated exponential's CDF), kept below `t_end`
 /// whatever the rounding.
 #[inline]
-pub(super) fn stratum_point(
-    sigma_t: f64,
-    t_end: f64,
-    absorbed: f64,
-    j: u32,
-    n: u32,
-    xi: f64,
-) -> f64 {
+fn stratum_point(sigma_t: f64, t_end: f64, absorbed: f64, j: u32, n: u32, xi: f64) -> f64 {
     let u = (j as f64 + xi) / n as f64;
     (-(-u * absorbed).ln_1p() / sigma_t).min(t_end * (1.0 - 1e-12))
 }
@@ -561,7 +554,7 @@ impl<'a> Vpm<'a> {
     /// σs Σ_l p L_l T_l at `x` in `medium` for a camera ray along `d`: single scattering
     /// from every light by one shadow ray each, attenuated by eq. 12 with eq. 13's
     /// refraction correction.
-    pub(super) fn single_scatter(
+    fn single_scatter(
         &self,
         x: Vec3,
         d: Vec3,
