@@ -207,6 +207,14 @@ def check_slab(n_photons, threads=None, radial_bins: int | None = None,
     return n
 
 
+def shared_bands(settings: dict, bands: int) -> tuple[bool, bool]:
+    """Whether a render of ``bands`` bands with ``settings`` traces one spectral photon pass
+    for all of them, and whether it holds every band at once (a spectral pass, or hero camera
+    paths over every band's maps)."""
+    spectral = bool(settings.get("spectral_photons")) and bands > 1
+    return spectral, spectral or (bool(settings.get("hero_camera")) and bands > 1)
+
+
 def render_memory_bytes(width: int, height: int, bands: int, settings: dict,
                         texels: int = 0) -> float:
     """A render's largest allocations: the film and radiance cube per pixel and band, the
@@ -220,8 +228,7 @@ def render_memory_bytes(width: int, height: int, bands: int, settings: dict,
     pixels = float(width) * float(height)
     need = pixels * (bands * PIXEL_BAND_BYTES + PIXEL_COLOUR_BYTES)
     integrator = settings.get("integrator")
-    spectral = bool(settings.get("spectral_photons")) and bands > 1
-    together = spectral or (bool(settings.get("hero_camera")) and bands > 1)
+    spectral, together = shared_bands(settings, bands)
     if integrator not in ("path", "volpath", "volpath-nee"):
         photons = float(settings.get("photons") or 0)
         if integrator in VOLUME_INTEGRATORS:

@@ -186,8 +186,7 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     render_bands = core_render_bands()
     w, h = res
     nb = len(band_list)
-    spectral = bool(settings.get("spectral_photons")) and nb > 1
-    together = spectral or (bool(settings.get("hero_camera")) and nb > 1)
+    spectral, together = limits.shared_bands(settings, nb)
     # Bands go to the core together, except in scenes with image textures: every band's
     # surfaces carry a texture's pixels, so those bands go one at a time (one copy in memory)
     # unless a spectral pass or hero camera paths need them all at once, which the memory

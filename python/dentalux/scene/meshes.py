@@ -4,8 +4,7 @@ triangles [mm] for the render contract.
 A mesh that bounds a dielectric medium must be closed and consistently oriented (the core's
 rule, :func:`check_closed`); one whose triangles all face inwards (negative enclosed volume)
 is flipped so that normals point out of the ``inside`` medium, which is the orientation the
-core assumes. Whether a point lies inside
-a mesh is the core's test (:func:`point_inside`).
+core assumes. Whether a point lies inside a mesh is the core's test (:func:`point_inside`).
 """
 
 from __future__ import annotations
