@@ -13,7 +13,7 @@ is biased by its own noise, since its regions were chosen on it; this run's is n
 
     .venv/bin/python benchmarks/render_discs_bias.py --truth-cache truth.npz --passes 32 \\
         [--photons 2000000 --k 50 --spp 4] [--no-kernel-clip] [--integrator vpm-full] \\
-        [--surface-radius MM] [--png bias.png] [--save A.npz] [--regions-from A.npz]
+        [--surface-radius MM] [--surface-k K] [--png bias.png] [--save A.npz] [--regions-from A.npz]
 """
 
 from __future__ import annotations
@@ -71,6 +71,8 @@ def main() -> None:
                          "on emission)")
     ap.add_argument("--surface-radius", type=float, default=None,
                     help="render option surface_radius [mm] (default: the core's cap)")
+    ap.add_argument("--surface-k", type=int, default=None,
+                    help="render option surface_k (default: --k)")
     ap.add_argument("--seed", type=int, default=3000, help="seed of the passes")
     ap.add_argument("--regions-from", default=None,
                     help="NPZ of an earlier --save: read the bias over its > 3 %% regions")
@@ -87,7 +89,8 @@ def main() -> None:
         raise SystemExit(f"--truth-cache holds a {truth.shape[1]}x{truth.shape[0]} truth, "
                          f"not {args.resolution}")
     extra = {k: v for k, v in (("aim", args.aim), ("volume_stored", args.volume_stored),
-                                ("surface_radius", args.surface_radius)) if v is not None}
+                                ("surface_radius", args.surface_radius),
+                                ("surface_k", args.surface_k)) if v is not None}
     img, var, done, wall = passes(scene_dict(False), res, args.passes, args.seed, args.photons,
                                   args.k, args.spp, args.surface_photons or args.photons,
                                   integrator=args.integrator, kernel_clip=args.kernel_clip,

@@ -102,7 +102,8 @@ def test_bad_scene_names_the_key(edit, message):
     [({"integrator": "magic"}, "settings.integrator"), ({"spp": 0}, "settings.spp"),
      ({"radius": -1.0}, "settings.radius"), ({"sp": 3}, "settings.sp: unknown key"),
      ({"kernel_clip": 1}, "settings.kernel_clip"),
-     ({"surface_radius": 0.0}, "settings.surface_radius")],
+     ({"surface_radius": 0.0}, "settings.surface_radius"),
+     ({"surface_k": 0}, "settings.surface_k"), ({"surface_k": 2.5}, "settings.surface_k")],
 )
 def test_bad_settings_name_the_key(settings, message):
     with pytest.raises(ValueError, match=message):
@@ -147,6 +148,25 @@ def test_surface_radius_sets_the_surface_map_alone():
     assert np.array_equal(runs[0].radiance, runs[1].radiance)
     assert not np.array_equal(runs[0].radiance, runs[2].radiance)
     assert np.isfinite(runs[2].radiance).all()
+
+
+def test_surface_k_sets_the_surface_map_alone():
+    """`surface_k` sets the photons of a surface-map estimate and leaves the media's `k`;
+    unset, the surface map takes `k` (the same image bit for bit as before the key existed).
+    With fewer photons the surface map's derived largest radius shrinks; the media's stays."""
+    import dentalux
+    from dentalux.scene.builtin import discs
+
+    base = dict(integrator="vpm", bands=[540.0], spp=2, photons=20_000,
+                volume_photons=200_000, seed=3, progress=False, k=64)
+    runs = [dentalux.render(discs(resolution=(24, 18)), **base, **extra)
+            for extra in ({}, {"surface_k": 64}, {"surface_k": 8})]
+    stats = [r.stats["bands"][0] for r in runs]
+    assert np.array_equal(runs[0].radiance, runs[1].radiance)
+    assert not np.array_equal(runs[0].radiance, runs[2].radiance)
+    assert np.isfinite(runs[2].radiance).all()
+    assert stats[2]["surface_radius"] < stats[0]["surface_radius"]
+    assert stats[2]["radius_medium1"] == stats[0]["radius_medium1"]
 
 
 def assert_band_by_band(sc, res, opts: dict, resolution, correlated: bool = False):

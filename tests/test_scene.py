@@ -545,7 +545,8 @@ def test_render_api_with_fake_core(fake_core):
     assert np.all(result.radiance[..., 0] == 605) and np.all(result.radiance[..., 1] == 450)
     scene0, settings0 = fake_core.calls[0]
     assert settings0 == {"integrator": "pm", "spp": 2, "photons": 100, "volume_photons": 5,
-                         "volume_stored": 0, "aim": 0.0, "k": 8, "radius": 1.5,
+                         "volume_stored": 0, "aim": 0.0, "k": 8, "surface_k": None,
+                         "radius": 1.5,
                          "surface_radius": None, "step": None, "seed": 7, "band": 605,
                          "threads": None, "max_depth": 64, "passes": 1, "alpha": 0.7,
                          "final_gather": False, "kernel_layer": 0.3, "kernel_clip": True,
@@ -615,6 +616,16 @@ def test_cli_render_kernel_clip_flag(fake_core, tmp_path):
         assert fake_core.calls[-1][1]["kernel_clip"] is value
 
 
+def test_cli_render_surface_k_reaches_the_settings(fake_core, tmp_path):
+    for flag, value in (([], None), (["--surface-k", "50"], 50)):
+        with pytest.raises(SystemExit) as exc:
+            main(["render", str(CORNELL), "--out", str(tmp_path / "o"), "--spp", "1",
+                  "--photons", "10", "--bands", "540", "--resolution", "4x3", "--overwrite",
+                  *flag])
+        assert exc.value.code == 0
+        assert fake_core.calls[-1][1]["surface_k"] == value
+
+
 @pytest.mark.parametrize("args,message", [
     (["--bands", "450,x"], "--bands = '450,x'"),
     (["--resolution", "64by48"], "--resolution = '64by48'"),
@@ -623,6 +634,7 @@ def test_cli_render_kernel_clip_flag(fake_core, tmp_path):
     (["--kernel-layer", "2"], "kernel_layer = 2"),
     (["--aim", "-0.1"], "aim = -0.1"),
     (["--volume-stored", "-1"], "volume_stored = -1"),
+    (["--surface-k", "0"], "surface_k = 0"),
 ])
 def test_cli_render_bad_options_exit_2(fake_core, tmp_path, capsys, args, message):
     with pytest.raises(SystemExit) as exc:

@@ -159,7 +159,8 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     resolution: (width, height) or "WxH", overriding the camera's. ``options``:
     volume_photons, volume_stored (photons the volume maps should hold: emission stops there,
     at most volume_photons), aim (fraction of volume photons aimed at the media, [0, 1)),
-    k, radius [mm], surface_radius [mm] (the surface map's; default radius), step [mm],
+    k, surface_k (the surface map's; default k), radius [mm], surface_radius [mm] (the
+    surface map's; default radius), step [mm],
     max_depth, passes, alpha, final_gather, kernel_layer (0 = the paper's spherical kernel),
     kernel_clip (clip the layer kernel by every face, not only the camera ray's entry and
     exit planes), spectral_photons (one photon pass for all bands), hero_camera (one camera

@@ -71,6 +71,9 @@ def render_command(
         None, help=" | ".join(INTEGRATORS) + " (default: from the scene)"
     ),
     k: int = typer.Option(None, help="nearest photons in a radiance estimate"),
+    surface_k: int = typer.Option(
+        None, "--surface-k",
+        help="nearest photons in an estimate of the surface photon map (default: --k)"),
     radius: float = typer.Option(None, help="maximum photon search radius [mm]"),
     surface_radius: float = typer.Option(
         None, help="maximum search radius of the surface photon map [mm] (default: --radius)"),
@@ -139,6 +142,7 @@ def render_command(
     band_list = parse_bands(bands)
     options = {k_: v for k_, v in (("volume_photons", volume_photons),
                                    ("volume_stored", volume_stored), ("aim", aim), ("k", k),
+                                   ("surface_k", surface_k),
                                    ("radius", radius), ("surface_radius", surface_radius),
                                    ("step", step), ("alpha", alpha),
                                    ("kernel_layer", kernel_layer),

@@ -160,7 +160,7 @@ pub fn render(scene: &Scene, settings: &Settings, control: &Control) -> Result<(
     let pm = SurfacePm {
         scene,
         map: &maps.surface,
-        k: settings.k,
+        k: settings.surface_photons_k(),
         r_max: settings
             .surface_cap()
             .unwrap_or_else(|| default_r_max(scene)),

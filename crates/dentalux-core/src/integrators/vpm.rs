@@ -17,7 +17,8 @@
 //! Parameters (defaults derived from the scene; each overridable by settings):
 //! | setting | default | meaning |
 //! |---|---|---|
-//! | `k` | 64 | photons per estimate |
+//! | `k` | 64 | photons per estimate in media |
+//! | `surface_k` | `k` | photons per estimate of the surface map |
 //! | `radius` [mm] | 2 · cbrt(3 k V / (4π n)) per medium: twice the radius that holds k photons at the map's mean density (V: bounding box of the map's photons, n: its photons), at most the medium's typical half-thickness ([`half_thickness`]) | largest gathering radius in media |
 //! | `surface_radius` [mm] | `radius`, else the 2-D analogue of its default, at most 0.1 × scene diagonal | largest gathering radius of the surface map |
 //! | `kernel_layer` | 0.3 | volume kernel: half-height of the boundary-aligned layer kernel over the gathering radius; 0 = the paper's sphere |
@@ -101,8 +102,10 @@ fn stratum_point(sigma_t: f64, t_end: f64, absorbed: f64, j: u32, n: u32, xi: f6
 /// Settings of the camera pass; `None` means "derive from the scene".
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VpmParams {
-    /// Photons per density estimate.
+    /// Photons per density estimate in media.
     pub k: usize,
+    /// Photons per estimate of the surface map (`Settings::surface_photons_k`).
+    pub surface_k: usize,
     /// Largest gathering radius in media [mm].
     pub radius: Option<f64>,
     /// Largest gathering radius of the surface map [mm] (`Settings::surface_cap`).
@@ -143,6 +146,7 @@ impl Default for VpmParams {
     fn default() -> Self {
         Self {
             k: 64,
+            surface_k: 64,
             radius: None,
             surface_radius: None,
             step: None,
@@ -162,6 +166,7 @@ impl VpmParams {
     pub fn from_settings(settings: &Settings, mode: StoreMode) -> Self {
         Self {
             k: settings.k,
+            surface_k: settings.surface_photons_k(),
             radius: settings.radius,
             surface_radius: settings.surface_cap(),
             step: settings.step,
@@ -313,7 +318,8 @@ impl<'a> Vpm<'a> {
             .collect();
         // capped like the surface photon mapping integrator's default (0.1 × scene diagonal)
         let surface_radius = params.surface_radius.unwrap_or_else(|| {
-            default_radius(&maps.surface, params.k, true).min(super::pm::default_r_max(scene))
+            default_radius(&maps.surface, params.surface_k, true)
+                .min(super::pm::default_r_max(scene))
         });
         Self {
             scene,
@@ -691,12 +697,12 @@ impl<'a> Vpm<'a> {
                     hit: &faces,
                     u: rng.uniform(),
                 };
-                let (k, r) = (self.params.k, self.surface_radius);
+                let (k, r) = (self.params.surface_k, self.surface_radius);
                 self.maps
                     .surface
                     .irradiance_clipped_disc_knn(hit.p, n, k, r, &mut sc.nb, &clip)
             } else {
-                let (k, r) = (self.params.k, self.surface_radius);
+                let (k, r) = (self.params.surface_k, self.surface_radius);
                 self.maps
                     .surface
                     .irradiance_disc_knn(hit.p, n, k, r, &mut sc.nb)
