@@ -84,6 +84,11 @@ class Quality:
     # (4 mm renders the same) and reads volpath-nee's level under the disc
     # (docs/figures.md, "The surface map's radius").
     surface_radius_mm: float = 2.0
+    # Photons per surface-map estimate in the disc scenes (`surface_k`): a quarter of `k`.
+    # The map there holds only indirect light; at 128 × 96 and 512 × 384 the smaller kernel
+    # halved the bias at the ribbon's edge and cut the time to 2 % per pixel
+    # (docs/bre.md, "512 × 384, measured"; docs/figures.md). None: `k`.
+    surface_k: int | None = None
     # Tissue figures (Fig. 4's enamel, Fig. 5, the crown): anisotropy lowered to this g by the
     # similarity relation (μs' kept), as the paper scaled its teeth's anisotropy; None
     # renders the library's g (docs/figures.md).
@@ -95,14 +100,16 @@ QUALITIES = {
     # 16 M volume photons with k 200: less colour noise in less time than 4 M with k 800
     # (benchmarks/chroma_noise.py, docs/figures.md "Photon counts")
     "preview": Quality("preview", (320, 240), 4, 1_000_000, 16_000_000, 0.3, (96, 72), 8192, 200,
-                       0.3, 100_000_000, 1.0, 8, teeth_volume_stored=16_000_000),
+                       0.3, 100_000_000, 1.0, 8, teeth_volume_stored=16_000_000,
+                       surface_k=50),
     # the paper's 100 M volume photons; 4 M surface photons instead of its 1 M global ones:
     # they are the volume pass's first 4 M photons (it emits about 9 M to store 100 M in the
     # discs), so they cost no tracing, and at k 800 the paper's 1 M left the light under the
     # raised disc 5 % low at 450 nm, a k-NN blur that 4 M removes (docs/figures.md, "The
     # surface map's photon count")
     "paper": Quality("paper", (512, 384), 16, 4_000_000, 100_000_000, 0.15, (192, 144), 16384,
-                     800, 0.15, 1_000_000_000, 0.5, 16, teeth_volume_stored=100_000_000),
+                     800, 0.15, 1_000_000_000, 0.5, 16, teeth_volume_stored=100_000_000,
+                     surface_k=200),
 }
 
 
@@ -171,7 +178,8 @@ def disc_settings(quality: Quality) -> dict:
     return dict(spp=quality.spp, photons=quality.photons,
                 volume_photons=EMIT_CAP * quality.volume_photons,
                 volume_stored=quality.volume_photons, aim=FIGURE_AIM, k=quality.k,
-                radius=quality.radius_mm, surface_radius=quality.surface_radius_mm)
+                radius=quality.radius_mm, surface_radius=quality.surface_radius_mm,
+                surface_k=quality.surface_k)
 
 
 def _render_figure(name: str, scene: dict, out: Path, quality: Quality, integrator: str = "vpm",
@@ -183,7 +191,7 @@ def _render_figure(name: str, scene: dict, out: Path, quality: Quality, integrat
     settings.update(overrides)
     if integrator in PATH_TRACERS:
         for key in ("volume_photons", "volume_stored", "aim", "photons", "k", "radius",
-                    "surface_radius"):
+                    "surface_radius", "surface_k"):
             settings.pop(key, None)
     result = render(sc, integrator=integrator, bands=bands, seed=1, correlated_bands=True,
                     **settings)
@@ -243,7 +251,7 @@ def _teeth_settings(quality: Quality) -> dict:
             "aim": FIGURE_AIM,
             "volume_stored": quality.teeth_volume_stored, "radius": quality.teeth_radius_mm,
             "surface_radius": quality.surface_radius_mm, "spp": quality.teeth_spp,
-            "k": quality.teeth_k}
+            "k": quality.teeth_k, "surface_k": None}
 
 
 def lower_anisotropy(scene: dict, quality: Quality, bands=PAPER_BANDS) -> dict:
