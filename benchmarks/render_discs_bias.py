@@ -29,10 +29,15 @@ BOX = 7  # pixels per side of the means the regions are chosen on
 LEVEL = 0.03  # their threshold on the relative difference
 
 
+def relative_means(img: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """(img − truth) / truth on BOX × BOX pixel means."""
+    return uniform_filter(img - truth, BOX) / np.maximum(uniform_filter(truth, BOX), 1e-12)
+
+
 def regions(earlier: np.ndarray, img: np.ndarray, truth: np.ndarray, rows: str | None) -> None:
     """Print the relative difference from the truth of ``earlier`` and of ``img`` over the
     regions where ``earlier``'s BOX × BOX means read more than LEVEL dark or bright."""
-    rel = uniform_filter(earlier - truth, BOX) / np.maximum(uniform_filter(truth, BOX), 1e-12)
+    rel = relative_means(earlier, truth)
     keep = np.ones(truth.shape, bool)
     if rows:
         y0, y1 = (int(v) for v in rows.split(":"))
@@ -123,9 +128,7 @@ def main() -> None:
             this = f"{args.photons}:{args.k}:{args.spp} x {done} passes"
             for axis, (m, name) in zip(ax[1:], ((earlier, Path(args.regions_from).name),
                                                 (img, this)), strict=True):
-                rel = uniform_filter(m - truth, BOX) / np.maximum(uniform_filter(truth, BOX),
-                                                                   1e-12)
-                im = axis.imshow(rel, cmap="RdBu_r", vmin=-0.06, vmax=0.06)
+                im = axis.imshow(relative_means(m, truth), cmap="RdBu_r", vmin=-0.06, vmax=0.06)
                 axis.set_title(f"(vpm − truth) / truth, {BOX} × {BOX} means\n{name}", fontsize=9)
             plt.colorbar(im, ax=ax[1:], shrink=0.85)
         else:
