@@ -197,6 +197,20 @@ impl ShapeInstance {
         }
     }
 
+    /// A lower bound on the distance from world point `p` to this shape's surface [mm], for
+    /// the analytic shapes; `None` for meshes.
+    pub fn clearance(&self, p: Vec3) -> Option<f64> {
+        let q = self.transform.map_or(p, |t| t.inv_point(p));
+        let local = match &self.geometry {
+            Geometry::Sphere(s) => s.clearance(q),
+            Geometry::Quad(s) => s.clearance(q),
+            Geometry::Box(s) => s.clearance(q),
+            Geometry::Cylinder(s) => s.clearance(q),
+            Geometry::Mesh(_) => return None,
+        };
+        Some(self.transform.map_or(local, |t| local * t.min_stretch()))
+    }
+
     /// World bounds of primitive `prim`.
     pub fn primitive_bounds(&self, prim: usize) -> Aabb {
         let local = match &self.geometry {
@@ -271,11 +285,16 @@ enum Prim {
     },
 }
 
+/// Most shapes for which [`Scene::clearance`] scans them all (the Fig. 3 scene has four).
+pub const CLEARANCE_SHAPES: usize = 16;
+
 /// The band-independent part of a scene: the shapes, their BVH and its primitives. Shared
 /// (behind an `Arc`) by every band's [`Scene`], so a multi-band render builds it once.
 #[derive(Debug)]
 struct Built {
     shapes: Vec<ShapeInstance>,
+    /// Whether [`Scene::clearance`] can bound distances (a few analytic shapes).
+    clearance: bool,
     /// BVH primitives in slot order (a leaf's primitives are contiguous).
     prims: Vec<Prim>,
     bvh: Bvh,
@@ -343,7 +362,14 @@ impl Scene {
                 }
             })
             .collect();
-        let built = Arc::new(Built { shapes, prims, bvh });
+        let clearance = shapes.len() <= CLEARANCE_SHAPES
+            && shapes.iter().all(|s| s.clearance(Vec3::ZERO).is_some());
+        let built = Arc::new(Built {
+            shapes,
+            clearance,
+            prims,
+            bvh,
+        });
         Ok(Self {
             eps: ray_offset(&built.bvh, &camera, &lights),
             camera,
@@ -429,6 +455,24 @@ impl Scene {
             Some(h.t)
         });
         best
+    }
+
+    /// A lower bound on the distance from `p` to every surface of the scene [mm]: a ray from
+    /// `p` shorter than it meets nothing, so a random walk need not intersect the scene for
+    /// such a flight (Geant4's "safety"). 0 where no bound is known (meshes, or more than
+    /// [`CLEARANCE_SHAPES`] shapes, where a scan would cost more than the BVH). Shrunk by a margin far above the intersection routines' rounding.
+    #[inline]
+    pub fn clearance(&self, p: Vec3) -> f64 {
+        if !self.built.clearance {
+            return 0.0;
+        }
+        let d = self
+            .built
+            .shapes
+            .iter()
+            .map(|s| s.clearance(p).unwrap_or(0.0))
+            .fold(f64::INFINITY, f64::min);
+        (d * (1.0 - 1e-9) - 1e-9).max(0.0)
     }
 
     /// The first surface from `o` along unit `d` within `t_max` [mm]: (hit point, normal), the

@@ -326,7 +326,7 @@ fn aimed_emission_keeps_the_surface_power() {
 /// A point light in an infinite medium of albedo a: the maps hold Φ a/(1 − a) of stored
 /// power whatever the number of photons (closed form). With a budget of stored photons the
 /// emission stops at the first batch that reaches it, the powers are normalised by the
-/// photons emitted, and the maps are the same with 1 or 2 threads.
+/// photons emitted, and the maps are the same with 1, 2 or 3 threads.
 #[test]
 fn stored_budget_normalises_and_ignores_threads() {
     let a = 0.9;
@@ -364,11 +364,13 @@ fn stored_budget_normalises_and_ignores_threads() {
             .install(|| trace(&scene, &emission, 0))
     };
     let one = run(1);
-    let two = run(2);
     let stored = one.volume[0].len() as u64;
-    assert_eq!(stored, two.volume[0].len() as u64);
-    assert_eq!(one.emitted, two.emitted);
-    assert_eq!(one.ledger, two.ledger);
+    // the chunks traced in parallel follow the thread count and the rate of storing
+    for other in [run(2), run(3)] {
+        assert_eq!(one.volume[0].photons(), other.volume[0].photons());
+        assert_eq!(one.emitted, other.emitted);
+        assert_eq!(one.ledger, other.ledger);
+    }
     // stopped at the photon that reached the budget: over by less than one photon's events
     // (P(more than 300 events) = 0.9³⁰⁰ ≈ 2e-14)
     assert!(stored >= cap && stored < cap + 300, "{stored}");

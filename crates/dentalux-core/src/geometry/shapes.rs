@@ -79,6 +79,10 @@ impl Sphere {
     pub fn contains(&self, p: Vec3) -> bool {
         (p - self.center).length_squared() < self.radius * self.radius
     }
+    /// Distance from `p` to the surface.
+    pub fn clearance(&self, p: Vec3) -> f64 {
+        ((p - self.center).length() - self.radius).abs()
+    }
     /// uv extents [mm per unit uv]: (equator length, meridian length).
     pub fn uv_scale(&self) -> [f64; 2] {
         [2.0 * PI * self.radius, PI * self.radius]
@@ -134,6 +138,11 @@ impl Quad {
     /// Area [mm²].
     pub fn area(&self) -> f64 {
         self.u.cross(self.v).length()
+    }
+    /// A lower bound on the distance from `p` to the quad: its distance to the quad's plane.
+    pub fn clearance(&self, p: Vec3) -> f64 {
+        let nn = self.u.cross(self.v);
+        ((p - self.corner).dot(nn) / nn.length()).abs()
     }
     /// uv extents [mm per unit uv].
     pub fn uv_scale(&self) -> [f64; 2] {
@@ -199,6 +208,17 @@ impl BoxShape {
     /// Whether `p` lies strictly inside.
     pub fn contains(&self, p: Vec3) -> bool {
         p.cmpgt(self.min).all() && p.cmplt(self.max).all()
+    }
+    /// Distance from `p` to the surface: to the nearest face inside, to the solid outside.
+    pub fn clearance(&self, p: Vec3) -> f64 {
+        let below = self.min - p;
+        let above = p - self.max;
+        let out = below.max(above);
+        if out.max_element() < 0.0 {
+            -out.max_element()
+        } else {
+            out.max(Vec3::ZERO).length()
+        }
     }
     /// uv extents [mm per unit uv] (the largest edge: faces differ).
     pub fn uv_scale(&self) -> [f64; 2] {
@@ -299,6 +319,21 @@ impl Cylinder {
         let w = p - self.center;
         let z = w.dot(self.axis);
         z > 0.0 && z < self.height && (w - self.axis * z).length_squared() < self.radius.powi(2)
+    }
+    /// Distance from `p` to the surface: to the nearest of side and caps inside, to the solid
+    /// outside.
+    pub fn clearance(&self, p: Vec3) -> f64 {
+        let w = p - self.center;
+        let z = w.dot(self.axis);
+        let rho = (w - self.axis * z).length();
+        // signed distances past the side and past the nearer cap (negative inside)
+        let side = rho - self.radius;
+        let cap = (-z).max(z - self.height);
+        if side < 0.0 && cap < 0.0 {
+            -side.max(cap)
+        } else {
+            side.max(0.0).hypot(cap.max(0.0))
+        }
     }
     /// uv extents [mm per unit uv] on the side: (circumference, height).
     pub fn uv_scale(&self) -> [f64; 2] {
@@ -417,5 +452,74 @@ mod tests {
             }
         }
         assert!(c.contains(Vec3::new(0.0, 4.9, 1.0)) && !c.contains(Vec3::new(0.0, 0.0, 2.1)));
+    }
+
+    /// The nearest surface point over many directions from `p`, by ray casting.
+    fn cast_distance(intersect: impl Fn(Vec3, Vec3) -> Option<f64>, p: Vec3) -> f64 {
+        let mut rng = crate::rng::Stream::new(3, 0, 0);
+        (0..20_000)
+            .filter_map(|_| intersect(p, crate::sampling::uniform_sphere(rng.uniform2())))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn clearance_bounds_every_ray_and_is_tight_for_closed_shapes() {
+        let cyl = Cylinder {
+            center: Vec3::new(1.0, -2.0, 0.5),
+            axis: unit(Vec3::new(0.3, 0.2, 1.0)),
+            radius: 2.0,
+            height: 1.5,
+        };
+        let sph = Sphere {
+            center: Vec3::new(0.5, 0.0, 1.0),
+            radius: 1.5,
+        };
+        let bx = BoxShape {
+            min: Vec3::new(-1.0, -2.0, 0.0),
+            max: Vec3::new(2.0, 1.0, 0.7),
+        };
+        let quad = Quad {
+            corner: Vec3::new(-3.0, -3.0, 0.2),
+            u: Vec3::new(6.0, 0.0, 0.5),
+            v: Vec3::new(0.0, 6.0, 0.0),
+        };
+        let mut rng = crate::rng::Stream::new(4, 0, 0);
+        for _ in 0..40 {
+            let p = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 6.0 - 3.0;
+            let cases: [(f64, f64, bool); 4] = [
+                (
+                    cyl.clearance(p),
+                    cast_distance(|o, d| cyl.intersect(o, d, 1e9).map(|h| h.t), p),
+                    true,
+                ),
+                (
+                    sph.clearance(p),
+                    cast_distance(|o, d| sph.intersect(o, d, 1e9).map(|h| h.t), p),
+                    true,
+                ),
+                (
+                    bx.clearance(p),
+                    cast_distance(|o, d| bx.intersect(o, d, 1e9).map(|h| h.t), p),
+                    true,
+                ),
+                (
+                    quad.clearance(p),
+                    cast_distance(|o, d| quad.intersect(o, d, 1e9).map(|h| h.t), p),
+                    false,
+                ),
+            ];
+            for (i, (bound, cast, tight)) in cases.into_iter().enumerate() {
+                // a lower bound on every ray's hit ...
+                assert!(bound <= cast + 1e-12, "shape {i} at {p}: {bound} > {cast}");
+                // ... and, for the closed shapes, the distance itself (20 000 directions find
+                // the nearest point to within a few per cent of the distance)
+                if tight {
+                    assert!(
+                        cast <= bound * 1.05 + 1e-3,
+                        "shape {i} at {p}: {bound} vs {cast}"
+                    );
+                }
+            }
+        }
     }
 }

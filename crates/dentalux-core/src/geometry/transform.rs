@@ -14,6 +14,19 @@ pub struct Transform {
     normal: DMat3,
     /// Cube root of |det| of the linear part: the mean length scale factor.
     scale: f64,
+    /// A lower bound on how much the linear part shortens a vector (its smallest singular
+    /// value): world distances are at least this times object distances.
+    min_stretch: f64,
+}
+
+/// 1 / sqrt(‖A‖₁ ‖A‖∞) for A the inverse of a linear part: since the spectral norm is at most
+/// sqrt(‖A‖₁ ‖A‖∞), this is at most the linear part's smallest singular value (exact for
+/// diagonal matrices).
+fn min_stretch(inv_lin: DMat3) -> f64 {
+    let a = inv_lin.to_cols_array_2d(); // a[col][row]
+    let col = (0..3).map(|c| (0..3).map(|r| a[c][r].abs()).sum::<f64>());
+    let row = (0..3).map(|r| (0..3).map(|c| a[c][r].abs()).sum::<f64>());
+    1.0 / (col.fold(0.0, f64::max) * row.fold(0.0, f64::max)).sqrt()
 }
 
 impl Transform {
@@ -49,6 +62,7 @@ impl Transform {
             inv: m.inverse(),
             normal: lin.inverse().transpose(),
             scale: det.abs().cbrt(),
+            min_stretch: min_stretch(lin.inverse()),
         })
     }
     /// The identity.
@@ -58,6 +72,7 @@ impl Transform {
             inv: DMat4::IDENTITY,
             normal: DMat3::IDENTITY,
             scale: 1.0,
+            min_stretch: 1.0,
         }
     }
     /// A translation by `t` [mm] (for tests and built-in geometry).
@@ -68,6 +83,7 @@ impl Transform {
             inv: m.inverse(),
             normal: DMat3::IDENTITY,
             scale: 1.0,
+            min_stretch: 1.0,
         }
     }
     /// Object point to world.
@@ -98,6 +114,11 @@ impl Transform {
     /// Mean length scale factor |det|^(1/3) (for uv scales in mm).
     pub fn scale(&self) -> f64 {
         self.scale
+    }
+    /// A lower bound on the factor by which the transform shortens any vector: a world
+    /// distance is at least this times the object-space distance it maps from.
+    pub fn min_stretch(&self) -> f64 {
+        self.min_stretch
     }
     /// World bounds of an object-space box.
     pub fn bounds(&self, b: &Aabb) -> Aabb {

@@ -203,6 +203,8 @@ fn trace_batch(
         let mut reflected = false; // any reflection at a mismatched boundary so far
         let mut specular = false; // any event at a mismatched boundary so far
         let mut events = 0u32;
+        // distance from ray.o within which the scene has no surface (`Scene::clearance`)
+        let mut clear = 0.0;
         // the walks a split photon still owes (`Aim::split_at`), each entry traced after the
         // walk that split: those start from its state; a walk may split again where it
         // enters another medium from a clear one, so they stack (depth first)
@@ -227,7 +229,12 @@ fn trace_batch(
                 } else {
                     f64::INFINITY
                 };
-                let hit = scene.intersect(&ray, flight_reach(s));
+                // within the clearance no surface can be met: the same walk, no intersection
+                let hit = if flight_reach(s) < clear {
+                    None
+                } else {
+                    scene.intersect(&ray, flight_reach(s))
+                };
                 let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
                 if sigma_t > 0.0 && s < t_hit {
                     let x = ray.at(s);
@@ -277,6 +284,13 @@ fn trace_batch(
                             hw.scale(m.phase.eval(cos), |j| phase_of(j).eval(cos));
                         }
                     }
+                    // the ball left around x; a fresh bound when it holds less than a mean
+                    // free path
+                    clear = if clear - s >= 1.0 / sigma_t {
+                        clear - s
+                    } else {
+                        scene.clearance(x)
+                    };
                     ray = Ray { o: x, d };
                     scattered = true;
                     continue;
@@ -289,6 +303,8 @@ fn trace_batch(
                         hw.forbid(|j| sigma_t_of(j) > 0.0);
                     }
                 }
+                // every branch below starts the next flight from a surface
+                clear = 0.0;
                 let Some(hit) = hit else {
                     led.escaped += power;
                     if let Some(bp) = out.bands.as_mut() {
@@ -422,6 +438,7 @@ fn trace_batch(
             if let Some(h) = &w.hero {
                 hw.clone_from(h);
             }
+            clear = 0.0;
             *left -= 1;
             if *left == 0 {
                 pending.pop();
@@ -495,6 +512,29 @@ pub struct Emission {
     pub surface_first: Option<u64>,
 }
 
+/// Batches in the next chunk of a photon pass, traced in parallel: 8 per thread; with a
+/// stored budget, the batches it still needs at the rate of the `done` batches so far (whole
+/// rounds of the threads, one round first to learn the rate), so that little traced work lies
+/// past the budget and is thrown away. The maps do not depend on it: the budget cuts the
+/// batches in batch order.
+fn chunk_len(stored_cap: Option<u64>, stored: u64, done: u64, threads: u64) -> u64 {
+    let full = threads * 8;
+    let Some(cap) = stored_cap else {
+        return full;
+    };
+    if done == 0 {
+        return threads;
+    }
+    if stored == 0 {
+        return full;
+    }
+    let need = (cap.saturating_sub(stored) as f64 * done as f64 / stored as f64).ceil() as u64;
+    need.div_ceil(threads)
+        .max(1)
+        .saturating_mul(threads)
+        .min(full)
+}
+
 /// The error for photon maps that cannot be allocated: a user-set photon count too large
 /// for this machine's memory (an allocation failure would otherwise abort the process).
 fn too_many_photons(photons: usize) -> Error {
@@ -555,7 +595,7 @@ pub fn trace_emission_bands(
     let nb = scenes.len();
     let nm = scenes[0].media.len();
     let n_batches = photons.div_ceil(BATCH);
-    let chunk = (rayon::current_num_threads() as u64 * 8).max(1);
+    let threads = (rayon::current_num_threads() as u64).max(1);
     let mut volume: Vec<Vec<Photon>> = vec![Vec::new(); nm];
     let mut surface = Vec::new();
     let mut ledger = Ledger::new(nm);
@@ -569,7 +609,7 @@ pub fn trace_emission_bands(
     let mut start = 0;
     'chunks: while start < n_batches {
         control.check()?;
-        let end = (start + chunk).min(n_batches);
+        let end = (start + chunk_len(emission.stored_cap, stored, start, threads)).min(n_batches);
         let batch = |b: u64, stop_at: Option<u64>| {
             let count = BATCH.min(photons - b * BATCH);
             let mut rng = Stream::new(seed, band, PHOTON_STREAM | tag | b);
