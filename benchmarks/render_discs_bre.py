@@ -12,6 +12,7 @@ interpolation between the passes that bracket it; "> N" when the budget ran out 
 
     .venv/bin/python benchmarks/render_discs_bre.py --truth-cache /tmp/discs_truth_128x96.npz \\
         [--configs bre:1000000:8:4,vpm:4000000:200:4,ppm-beam:1000000:8:4] [--budget 120]
+        [--surface-k 50] [--aim 0.5 --surface-photons 170000]
 
 `--radius-curve 1.6,0.8,0.4,0.2` also measures bre's per-pixel bias against the truth at each
 disc radius (passes' own noise and the truth's removed from the squared error: bias² =
@@ -65,6 +66,13 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=4000)
     ap.add_argument("--surface-k", type=int, default=None,
                     help="render option surface_k for every configuration (default: k)")
+    ap.add_argument("--aim", type=float, default=None,
+                    help="aim this fraction of the volume photons at the discs; a "
+                         "configuration's photons are then the volume photons stored per pass "
+                         "(volume_stored; at most 25x as many emitted)")
+    ap.add_argument("--surface-photons", type=float, default=None,
+                    help="photons emitted for the surface map per pass (default: a "
+                         "configuration's photons)")
     ap.add_argument("--radius-curve", default="", help="disc radii [mm] for bre's bias curve")
     ap.add_argument("--curve-passes", type=int, default=16)
     ap.add_argument("--curve-photons", type=int, default=1_000_000)
@@ -90,15 +98,19 @@ def main() -> None:
         integrator, extra = name, ({"radius": float(radius[0])} if radius else {})
         if args.surface_k:
             extra["surface_k"] = args.surface_k
+        n = int(float(photons))
+        extra["photons"] = int(args.surface_photons) if args.surface_photons else n
+        extra["volume_photons"] = n
+        if args.aim is not None:
+            extra.update(aim=args.aim, volume_stored=n, volume_photons=25 * n)
         if name == "ppm-beam":
             integrator = "ppm"
             extra["volume_estimator"] = "beam"
         total, curve, walls = None, [], []
         cpu0, wall0 = cpu_seconds(), time.perf_counter()
         for p in range(args.max_passes):
-            img, _, _ = render(scene, res, integrator=integrator, spp=int(spp),
-                               volume_photons=int(float(photons)), photons=int(float(photons)),
-                               k=int(k), seed=args.seed + 100 * c, pass_index=p, **extra)
+            img, _, _ = render(scene, res, integrator=integrator, spp=int(spp), k=int(k),
+                               seed=args.seed + 100 * c, pass_index=p, **extra)
             total = img if total is None else total + img
             n = p + 1
             cpu, wall = cpu_seconds() - cpu0, time.perf_counter() - wall0

@@ -332,7 +332,9 @@ impl Cylinder {
         if side < 0.0 && cap < 0.0 {
             -side.max(cap)
         } else {
-            side.max(0.0).hypot(cap.max(0.0))
+            // not f64::hypot: libm's is several times slower, and these are mm, far from
+            // overflow
+            (side.max(0.0).powi(2) + cap.max(0.0).powi(2)).sqrt()
         }
     }
     /// uv extents [mm per unit uv] on the side: (circumference, height).
