@@ -166,23 +166,14 @@ pub struct PhotonMap {
 }
 
 /// Arrange `p` as a kd-tree; subtrees of at least [`PAR_BUILD`] photons first ask `stop`,
-/// and a stopped build leaves its subtree unordered (the caller discards it).
-fn build_rec(p: &mut [Photon], stop: &(dyn Fn() -> bool + Sync)) {
+/// and a stopped build leaves its subtree unordered (the caller discards it). Each node
+/// splits at the median along the longest side of its cell (`lo`, `hi`: the photons' box at
+/// the root, then the parent's cell cut at the split), as Jensen's balanced photon map
+/// does: scanning every node's photons for their own box was a third of a build.
+fn build_rec(p: &mut [Photon], lo: [f32; 3], hi: [f32; 3], stop: &(dyn Fn() -> bool + Sync)) {
     let n = p.len();
     if n <= LEAF || (n >= PAR_BUILD && stop()) {
         return;
-    }
-    // split along the axis of largest extent, at the median
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    // compares, not f32::min/max: positions are finite (`build_until`), so NaN handling would
-    // only slow this scan, a third of a build
-    for q in p.iter() {
-        for a in 0..3 {
-            let x = q.pos[a];
-            lo[a] = if x < lo[a] { x } else { lo[a] };
-            hi[a] = if x > hi[a] { x } else { hi[a] };
-        }
     }
     let ext = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
     let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] {
@@ -193,15 +184,28 @@ fn build_rec(p: &mut [Photon], stop: &(dyn Fn() -> bool + Sync)) {
         2
     };
     let mid = n / 2;
-    p.select_nth_unstable_by(mid, |a, b| a.pos[axis].total_cmp(&b.pos[axis]));
+    // `<`, not total_cmp: positions are finite (`build_until`), and the plain compare keeps
+    // the selection's inner loop short
+    p.select_nth_unstable_by(mid, |a, b| {
+        a.pos[axis]
+            .partial_cmp(&b.pos[axis])
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
     p[mid].set_axis(axis);
+    let split = p[mid].pos[axis];
+    let (mut hi_l, mut lo_r) = (hi, lo);
+    hi_l[axis] = split;
+    lo_r[axis] = split;
     let (l, r) = p.split_at_mut(mid);
     let r = &mut r[1..];
     if n >= PAR_BUILD {
-        rayon::join(|| build_rec(l, stop), || build_rec(r, stop));
+        rayon::join(
+            || build_rec(l, lo, hi_l, stop),
+            || build_rec(r, lo_r, hi, stop),
+        );
     } else {
-        build_rec(l, stop);
-        build_rec(r, stop);
+        build_rec(l, lo, hi_l, stop);
+        build_rec(r, lo_r, hi, stop);
     }
 }
 
@@ -227,7 +231,15 @@ impl PhotonMap {
         // drop photons whose position is not finite: they would poison the ordering
         photons.retain(|p| p.pos.iter().all(|c| c.is_finite()) && p.power.is_finite());
         photons.shrink_to_fit();
-        build_rec(&mut photons, stop);
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        for q in &photons {
+            for a in 0..3 {
+                lo[a] = lo[a].min(q.pos[a]);
+                hi[a] = hi[a].max(q.pos[a]);
+            }
+        }
+        build_rec(&mut photons, lo, hi, stop);
         if stop() {
             return Err(Error::Cancelled);
         }
