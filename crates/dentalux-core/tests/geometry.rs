@@ -163,3 +163,70 @@ fn a_flight_searched_to_its_collision_sees_what_a_search_to_infinity_sees() {
     }
     assert!(before > 2_000 && beyond > 2_000, "{before} {beyond}");
 }
+
+/// `Scene::clearance` is a lower bound on the distance to every surface: no ray from a
+/// point meets a surface within it (analytic shapes, one of them transformed), and it is 0
+/// where the scene holds a mesh.
+#[test]
+fn clearance_is_a_lower_bound_and_zero_with_meshes() {
+    use dentalux_core::geometry::shapes::{Cylinder, Quad};
+    use dentalux_core::geometry::transform::Transform;
+    let dielectric = Boundary::Dielectric {
+        inside: 0,
+        outside: 0,
+    };
+    let opaque = Boundary::Opaque { surface: 0 };
+    let cylinder = Geometry::Cylinder(Cylinder {
+        center: Vec3::new(-3.0, 0.0, 0.0),
+        axis: Vec3::Z,
+        radius: 2.0,
+        height: 1.5,
+    });
+    let tilted = Transform::from_rows(
+        "t",
+        [
+            [0.9, -0.4, 0.0, 3.0],
+            [0.4, 0.9, 0.3, 0.0],
+            [0.0, 0.0, 1.2, 0.5],
+            [0.0, 0.0, 0.0, 1.0],
+        ],
+    )
+    .unwrap();
+    let sphere = Geometry::Sphere(Sphere {
+        center: Vec3::ZERO,
+        radius: 1.5,
+    });
+    let floor = Geometry::Quad(Quad {
+        corner: Vec3::new(-10.0, -10.0, -1.0),
+        u: Vec3::new(20.0, 0.0, 0.0),
+        v: Vec3::new(0.0, 20.0, 0.0),
+    });
+    let scene = scene_with(vec![
+        ShapeInstance::new("c", cylinder, None, dielectric).unwrap(),
+        ShapeInstance::new("s", sphere.clone(), Some(tilted), dielectric).unwrap(),
+        ShapeInstance::new("q", floor, None, opaque).unwrap(),
+    ]);
+    let mut rng = Stream::new(5, 0, 0);
+    let mut positive = 0;
+    for _ in 0..300 {
+        let p = Vec3::new(
+            rng.uniform() * 12.0 - 6.0,
+            rng.uniform() * 6.0 - 3.0,
+            rng.uniform() * 4.0 - 1.5,
+        );
+        let c = scene.clearance(p);
+        assert!(c >= 0.0);
+        positive += (c > 0.0) as usize;
+        for _ in 0..200 {
+            let ray = Ray::new(p, uniform_sphere(rng.uniform2()));
+            assert!(scene.intersect(&ray, flight_reach(c)).is_none(), "{p}: {c}");
+        }
+    }
+    assert!(positive > 250, "{positive}");
+    let mesh = TriangleMesh::uv_sphere(Vec3::new(5.0, 5.0, 5.0), 1.0, 8, 16);
+    let with_mesh = scene_with(vec![
+        ShapeInstance::new("s", sphere, None, dielectric).unwrap(),
+        ShapeInstance::new("m", Geometry::Mesh(mesh), None, dielectric).unwrap(),
+    ]);
+    assert_eq!(with_mesh.clearance(Vec3::new(20.0, 0.0, 0.0)), 0.0);
+}

@@ -153,6 +153,52 @@ mod tests {
     }
 
     #[test]
+    fn min_stretch_bounds_every_direction() {
+        let mut rng = crate::rng::Stream::new(9, 0, 0);
+        let rows = [
+            // a scale: the bound is its smallest factor
+            [
+                [2.0, 0.0, 0.0, 1.0],
+                [0.0, 0.5, 0.0, 0.0],
+                [0.0, 0.0, 3.0, 0.0],
+            ],
+            // a rotation about z by 30° with a shear
+            [
+                [0.866, -0.5, 0.2, 0.0],
+                [0.5, 0.866, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0],
+            ],
+        ];
+        for (i, r) in rows.iter().enumerate() {
+            let t = Transform::from_rows("t", [r[0], r[1], r[2], [0.0, 0.0, 0.0, 1.0]]).unwrap();
+            let shortest = (0..20_000)
+                .map(|_| {
+                    t.vector(crate::sampling::uniform_sphere(rng.uniform2()))
+                        .length()
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                t.min_stretch() <= shortest + 1e-12,
+                "{i}: {}",
+                t.min_stretch()
+            );
+            assert!(t.min_stretch() > 0.5 * shortest, "{i}: {}", t.min_stretch());
+        }
+        let scale = Transform::from_rows(
+            "t",
+            [
+                [2.0, 0.0, 0.0, 0.0],
+                [0.0, 0.5, 0.0, 0.0],
+                [0.0, 0.0, 3.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0],
+            ],
+        )
+        .unwrap();
+        assert!((scale.min_stretch() - 0.5).abs() < 1e-12);
+        assert_eq!(Transform::identity().min_stretch(), 1.0);
+    }
+
+    #[test]
     fn rejects_singular_and_projective() {
         let mut r = [[0.0; 4]; 4];
         r[3][3] = 1.0;
