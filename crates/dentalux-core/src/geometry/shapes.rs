@@ -488,27 +488,21 @@ mod tests {
         let mut rng = crate::rng::Stream::new(4, 0, 0);
         for _ in 0..40 {
             let p = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 6.0 - 3.0;
-            let cases: [(f64, f64, bool); 4] = [
-                (
-                    cyl.clearance(p),
-                    cast_distance(|o, d| cyl.intersect(o, d, 1e9).map(|h| h.t), p),
-                    true,
-                ),
-                (
-                    sph.clearance(p),
-                    cast_distance(|o, d| sph.intersect(o, d, 1e9).map(|h| h.t), p),
-                    true,
-                ),
-                (
-                    bx.clearance(p),
-                    cast_distance(|o, d| bx.intersect(o, d, 1e9).map(|h| h.t), p),
-                    true,
-                ),
-                (
-                    quad.clearance(p),
-                    cast_distance(|o, d| quad.intersect(o, d, 1e9).map(|h| h.t), p),
-                    false,
-                ),
+            // (the bound, the nearest hit over many rays, whether the bound is the distance)
+            macro_rules! case {
+                ($shape:expr, $tight:expr) => {
+                    (
+                        $shape.clearance(p),
+                        cast_distance(|o, d| $shape.intersect(o, d, 1e9).map(|h| h.t), p),
+                        $tight,
+                    )
+                };
+            }
+            let cases = [
+                case!(cyl, true),
+                case!(sph, true),
+                case!(bx, true),
+                case!(quad, false),
             ];
             for (i, (bound, cast, tight)) in cases.into_iter().enumerate() {
                 // a lower bound on every ray's hit ...
