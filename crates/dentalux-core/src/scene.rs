@@ -460,7 +460,8 @@ impl Scene {
     /// A lower bound on the distance from `p` to every surface of the scene [mm]: a ray from
     /// `p` shorter than it meets nothing, so a random walk need not intersect the scene for
     /// such a flight (Geant4's "safety"). 0 where no bound is known (meshes, or more than
-    /// [`CLEARANCE_SHAPES`] shapes, where a scan would cost more than the BVH). Shrunk by a margin far above the intersection routines' rounding.
+    /// [`CLEARANCE_SHAPES`] shapes, where a scan would cost more than the BVH). Shrunk by a
+    /// margin far above the intersection routines' rounding.
     #[inline]
     pub fn clearance(&self, p: Vec3) -> f64 {
         if !self.built.clearance {

@@ -210,6 +210,19 @@ fn build_rec(p: &mut [Photon], lo: [f32; 3], hi: [f32; 3], stop: &(dyn Fn() -> b
     }
 }
 
+/// Bounding box of the photons' positions (inverted, +∞ to −∞, when empty).
+fn bounds_of(photons: &[Photon]) -> ([f32; 3], [f32; 3]) {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in photons {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p.pos[a]);
+            hi[a] = hi[a].max(p.pos[a]);
+        }
+    }
+    (lo, hi)
+}
+
 #[inline]
 pub(super) fn dist2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
     let (dx, dy, dz) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
@@ -232,14 +245,7 @@ impl PhotonMap {
         // drop photons whose position is not finite: they would poison the ordering
         photons.retain(|p| p.pos.iter().all(|c| c.is_finite()) && p.power.is_finite());
         photons.shrink_to_fit();
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
-        for q in &photons {
-            for a in 0..3 {
-                lo[a] = lo[a].min(q.pos[a]);
-                hi[a] = hi[a].max(q.pos[a]);
-            }
-        }
+        let (lo, hi) = bounds_of(&photons);
         build_rec(&mut photons, lo, hi, stop);
         if stop() {
             return Err(Error::Cancelled);
@@ -264,15 +270,7 @@ impl PhotonMap {
     }
     /// Bounding box of the photons' positions (inverted, +∞ to −∞, when empty).
     pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
-        for p in &self.photons {
-            for a in 0..3 {
-                lo[a] = lo[a].min(p.pos[a]);
-                hi[a] = hi[a].max(p.pos[a]);
-            }
-        }
-        (lo, hi)
+        bounds_of(&self.photons)
     }
     /// Total stored power Σ ΔΦ_p.
     pub fn total_power(&self) -> f64 {
