@@ -85,7 +85,9 @@ impl ShapeInstance {
         };
         let dielectric = matches!(boundary, Boundary::Dielectric { .. });
         let mut geometry = geometry;
-        let mut transform = transform;
+        // an identity transform (as the scene files give for untransformed shapes) would
+        // cost two matrix products per intersection for nothing
+        let mut transform = transform.filter(|t| !t.is_identity());
         let uv_scale = match &mut geometry {
             Geometry::Sphere(s) => {
                 finite("center", s.center)?;

@@ -111,6 +111,11 @@ impl Transform {
     pub fn normal(&self, n: Vec3) -> Vec3 {
         (self.normal * n).normalize()
     }
+    /// Whether this is exactly the identity (then points, vectors and normals map to
+    /// themselves bit for bit, up to the sign of zero).
+    pub fn is_identity(&self) -> bool {
+        self.m == DMat4::IDENTITY
+    }
     /// Mean length scale factor |det|^(1/3) (for uv scales in mm).
     pub fn scale(&self) -> f64 {
         self.scale

@@ -12,6 +12,9 @@ use crate::math::{Frame, Vec3};
 use crate::phase::PhaseFunction;
 use std::f64::consts::PI;
 
+/// Photons of a layer kernel whose weights are summed together (see `layer_estimate`).
+const LAYER_BATCH: usize = 64;
+
 /// A density estimate: its value, the radius it used [mm] and the number of photons in it.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Estimate {
@@ -200,17 +203,35 @@ impl PhotonMap {
         // the cut cylinder's bounding box: |z n_i + ρ_i| ≤ t |n_i| + R √(1 − n_i²)
         let big_r = big_r2.sqrt();
         let half = [n.x, n.y, n.z].map(|c| t * c.abs() + big_r * (1.0 - c * c).max(0.0).sqrt());
-        self.for_each_within_box(x, (big_r2 + t * t).sqrt(), half, |p, _| {
+        // the walk only collects the photons in the kernel; their phase weights are summed
+        // a batch at a time, in the same order, so the walk's unpredictable branches do not
+        // stall the square roots and divisions of the weights
+        let mut batch = [(0.0f64, 0u32); LAYER_BATCH];
+        let mut len = 0;
+        let photons = self.photons();
+        let mut sum = |batch: &[(f64, u32)]| {
+            for &(z, i) in batch {
+                let p = &photons[i as usize];
+                let w = phase.eval(p.direction().dot(wo)) * p.power as f64;
+                s0 += w;
+                s1 += w * z;
+            }
+        };
+        self.for_each_within_box(x, (big_r2 + t * t).sqrt(), half, |p, i| {
             let d = p.position() - x;
             let z = d.dot(n);
             if z < a || z > b || d.dot(d) - z * z > big_r2 || skip == Some(p as *const Photon) {
                 return;
             }
-            let w = phase.eval(p.direction().dot(wo)) * p.power as f64;
-            s0 += w;
-            s1 += w * z;
+            batch[len] = (z, i as u32);
+            len += 1;
             e.count += 1;
+            if len == LAYER_BATCH {
+                sum(&batch);
+                len = 0;
+            }
         });
+        sum(&batch[..len]);
         let [v, m1, m2] = planes
             .clip
             .and_then(|c| c.moments(x, n, a, b, big_r))

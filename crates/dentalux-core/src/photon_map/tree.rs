@@ -341,8 +341,9 @@ impl PhotonMap {
         }
     }
 
-    /// Call `f(photon, distance²)` for every photon within `r` [mm] of `x`.
-    pub fn for_each_within<F: FnMut(&Photon, f32)>(&self, x: Vec3, r: f64, f: F) {
+    /// Call `f(photon, its index in [`Self::photons`])` for every photon within `r` [mm] of
+    /// `x`.
+    pub fn for_each_within<F: FnMut(&Photon, usize)>(&self, x: Vec3, r: f64, f: F) {
         self.for_each_within_box(x, r, [f64::INFINITY; 3], f);
     }
 
@@ -350,7 +351,7 @@ impl PhotonMap {
     /// and photons outside it are skipped (a flat kernel inside a larger sphere reads only
     /// the photons near it). The photons both inside the sphere and the box are visited in
     /// the same order as by [`Self::for_each_within`], so sums over them are bit-identical.
-    pub fn for_each_within_box<F: FnMut(&Photon, f32)>(
+    pub fn for_each_within_box<F: FnMut(&Photon, usize)>(
         &self,
         x: Vec3,
         r: f64,
@@ -373,19 +374,17 @@ impl PhotonMap {
             sp -= 1;
             let (lo, hi) = stack[sp];
             if hi - lo <= LEAF {
-                for p in &self.photons[lo..hi] {
-                    let d2 = dist2(&p.pos, &q);
-                    if d2 <= r2 && !outside(p) {
-                        f(p, d2);
+                for (i, p) in self.photons[lo..hi].iter().enumerate() {
+                    if dist2(&p.pos, &q) <= r2 && !outside(p) {
+                        f(p, lo + i);
                     }
                 }
                 continue;
             }
             let mid = (lo + hi) / 2;
             let p = &self.photons[mid];
-            let d2 = dist2(&p.pos, &q);
-            if d2 <= r2 && !outside(p) {
-                f(p, d2);
+            if dist2(&p.pos, &q) <= r2 && !outside(p) {
+                f(p, mid);
             }
             let axis = p.axis();
             let delta = q[axis] - p.pos[axis];
