@@ -41,8 +41,14 @@ impl Frame {
 
 /// Direction with polar cosine `cos_theta` and azimuth `phi` about the unit axis `axis`.
 pub fn direction_about(axis: Vec3, cos_theta: f64, phi: f64) -> Vec3 {
-    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
     let (sp, cp) = phi.sin_cos();
+    direction_about_cs(axis, cos_theta, (cp, sp))
+}
+
+/// [`direction_about`] with the azimuth given as (cos φ, sin φ).
+#[inline]
+pub fn direction_about_cs(axis: Vec3, cos_theta: f64, (cp, sp): (f64, f64)) -> Vec3 {
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
     Frame::from_axis(axis)
         .to_world(Vec3::new(sin_theta * cp, sin_theta * sp, cos_theta))
         .normalize()

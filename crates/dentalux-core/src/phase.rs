@@ -4,7 +4,7 @@
 //! between the travel directions before and after scattering; values are per steradian.
 
 use crate::error::{check_range, Error, Result};
-use crate::math::{direction_about, Vec3};
+use crate::math::{direction_about_cs, Vec3};
 use std::f64::consts::PI;
 
 const INV_4PI: f64 = 1.0 / (4.0 * PI);
@@ -209,11 +209,11 @@ impl PhaseFunction {
     }
 
     /// New travel direction after scattering a photon travelling along `d`;
-    /// `u` gives cos θ (see [`Self::sample_cos`]) and `u_phi` the azimuth.
+    /// `u` gives cos θ (see [`Self::sample_cos`]) and `azimuth` the uniform azimuth as
+    /// (cos φ, sin φ) ([`crate::rng::Stream::azimuth`]).
     #[inline]
-    pub fn sample(&self, d: Vec3, u: [f64; 2], u_phi: f64) -> Vec3 {
-        let cos_theta = self.sample_cos(u);
-        direction_about(d, cos_theta, 2.0 * PI * u_phi)
+    pub fn sample(&self, d: Vec3, u: [f64; 2], azimuth: (f64, f64)) -> Vec3 {
+        direction_about_cs(d, self.sample_cos(u), azimuth)
     }
 
     /// CDF of cos θ, P(cos θ ≤ mu): used by the chi-square tests.
@@ -331,7 +331,7 @@ mod tests {
     fn sampled_direction_has_sampled_cosine_about_travel_direction() {
         let p = PhaseFunction::HenyeyGreenstein { g: 0.8 };
         let d = Vec3::new(0.3, 0.4, -0.5).normalize();
-        let w = p.sample(d, [0.25, 0.5], 0.3);
+        let w = p.sample(d, [0.25, 0.5], (0.6, 0.8));
         assert!((w.dot(d) - p.sample_cos([0.25, 0.5])).abs() < 1e-12);
     }
 }

@@ -84,6 +84,23 @@ impl Stream {
     pub fn uniform2(&mut self) -> [f64; 2] {
         [self.uniform(), self.uniform()]
     }
+    /// (cos φ, sin φ) of an azimuth φ uniform on [0, 2π), without trigonometry: a point
+    /// (x, y) uniform in the unit disc (by rejection from the square, two 32-bit coordinates
+    /// per draw, 4/π draws on average) has a uniform polar angle θ, and its double angle is
+    /// (x² − y², 2xy) / (x² + y²). glibc's sin_cos was 4 % of a photon pass (Fig. 3's discs).
+    #[inline]
+    pub fn azimuth(&mut self) -> (f64, f64) {
+        const SCALE: f64 = 1.0 / (1u64 << 31) as f64;
+        loop {
+            let bits = self.0.next_u64();
+            let x = (bits as u32) as f64 * SCALE - 1.0;
+            let y = (bits >> 32) as f64 * SCALE - 1.0;
+            let r2 = x * x + y * y;
+            if r2 <= 1.0 && r2 > 0.0 {
+                return ((x * x - y * y) / r2, 2.0 * x * y / r2);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -117,5 +134,30 @@ mod tests {
         let mean = sum / n as f64;
         // stderr of the mean of U(0,1) is sqrt(1/12/n); allow 4 of them
         assert!((mean - 0.5).abs() < 4.0 * (1.0 / 12.0 / n as f64).sqrt());
+    }
+
+    /// The azimuth is a unit vector whose angle is uniform: 32 equal sectors of the circle
+    /// by a chi-square test (31 degrees of freedom; 60 is exceeded with probability 1e-3),
+    /// and cos 2φ, sin 2φ (which the rejection's double angle would skew first) average 0
+    /// within 4 standard errors (each has variance 1/2).
+    #[test]
+    fn azimuth_is_a_uniform_unit_vector() {
+        let mut s = Stream::new(3, 0, 1);
+        let (n, bins) = (320_000usize, 32usize);
+        let mut count = vec![0usize; bins];
+        let (mut c2, mut s2) = (0.0, 0.0);
+        for _ in 0..n {
+            let (c, sn) = s.azimuth();
+            assert!((c * c + sn * sn - 1.0).abs() < 1e-14);
+            let phi = sn.atan2(c).rem_euclid(std::f64::consts::TAU);
+            count[((phi / std::f64::consts::TAU * bins as f64) as usize).min(bins - 1)] += 1;
+            c2 += c * c - sn * sn;
+            s2 += 2.0 * c * sn;
+        }
+        let e = n as f64 / bins as f64;
+        let chi2: f64 = count.iter().map(|&k| (k as f64 - e).powi(2) / e).sum();
+        assert!(chi2 < 60.0, "chi-square {chi2} over {bins} sectors");
+        let tol = 4.0 * (0.5 / n as f64).sqrt();
+        assert!((c2 / n as f64).abs() < tol && (s2 / n as f64).abs() < tol);
     }
 }

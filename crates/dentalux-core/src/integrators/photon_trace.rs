@@ -276,7 +276,7 @@ fn trace_batch(
                         }
                     }
                     // new direction from the phase function, eqs. 7–10
-                    let d = m.phase.sample(ray.d, rng.uniform2(), rng.uniform());
+                    let d = m.phase.sample(ray.d, rng.uniform2(), rng.azimuth());
                     if spectral {
                         let cos = ray.d.dot(d);
                         let phase_of = |j: usize| &scenes[j].media[mi].phase;

@@ -81,7 +81,7 @@ pub fn radiance_with(scene: &Scene, faces: &PlanarFaces, ray: &Ray, rng: &mut St
                 }
             }
             l += beta * faces.estimate(scene, medium, x, ray.d, &m.phase, || rng.uniform2());
-            let d = m.phase.sample(ray.d, rng.uniform2(), rng.uniform());
+            let d = m.phase.sample(ray.d, rng.uniform2(), rng.azimuth());
             ray = Ray { o: x, d };
             count_emission = false;
             planar_covered = false;
