@@ -300,6 +300,58 @@ struct Built {
     /// BVH primitives in slot order (a leaf's primitives are contiguous).
     prims: Vec<Prim>,
     bvh: Bvh,
+    /// Per medium index, the shapes a walk in that medium can only meet ([`enclosures`]).
+    enclosures: Vec<Option<Box<[u32]>>>,
+}
+
+/// Per medium index: the analytic shapes that hold the medium inside, when they are all a
+/// walk in it can meet first. That is so when the medium is inside those shapes only, is
+/// nobody's outside nor the camera's, and no other shape's box touches theirs: a walk in
+/// the medium is then inside one of them, and every point of its flight up to that shape's
+/// surface lies in the shape's box, where nothing else is. `None` where any of that fails
+/// (meshes included: their triangles want the BVH).
+fn enclosures(shapes: &[ShapeInstance], ambient: u32) -> Vec<Option<Box<[u32]>>> {
+    let bounds: Vec<Aabb> = shapes
+        .iter()
+        .map(|s| (0..s.primitive_count()).fold(Aabb::EMPTY, |b, k| b.union(&s.primitive_bounds(k))))
+        .collect();
+    // closed boxes, widened by far more than any rounding of the bounds: touching counts
+    let touch = |a: &Aabb, b: &Aabb| {
+        let pad = 1e-6 * (1.0 + a.max.abs().max_element() + b.max.abs().max_element());
+        (0..3).all(|i| a.min[i] <= b.max[i] + pad && b.min[i] <= a.max[i] + pad)
+    };
+    let media = shapes
+        .iter()
+        .filter_map(|s| match s.boundary {
+            Boundary::Dielectric { inside, outside } => Some(inside.max(outside) as usize + 1),
+            Boundary::Opaque { .. } => None,
+        })
+        .max()
+        .unwrap_or(0);
+    (0..media as u32)
+        .map(|m| {
+            if m == ambient {
+                return None;
+            }
+            let mut own = Vec::new();
+            for (i, s) in shapes.iter().enumerate() {
+                if let Boundary::Dielectric { inside, outside } = s.boundary {
+                    if outside == m {
+                        return None;
+                    }
+                    if inside == m {
+                        own.push(i as u32);
+                    }
+                }
+            }
+            let alone = |i: usize| {
+                !matches!(shapes[i].geometry, Geometry::Mesh(_))
+                    && (0..shapes.len()).all(|j| j == i || !touch(&bounds[i], &bounds[j]))
+            };
+            (!own.is_empty() && own.iter().all(|&i| alone(i as usize)))
+                .then(|| own.into_boxed_slice())
+        })
+        .collect()
 }
 
 /// Everything a band's render needs.
@@ -367,6 +419,7 @@ impl Scene {
         let clearance = shapes.len() <= CLEARANCE_SHAPES
             && shapes.iter().all(|s| s.clearance(Vec3::ZERO).is_some());
         let built = Arc::new(Built {
+            enclosures: enclosures(&shapes, ambient_medium),
             shapes,
             clearance,
             prims,
@@ -459,6 +512,25 @@ impl Scene {
         best
     }
 
+    /// [`Scene::intersect`] for a ray that travels in `medium`: where the medium's shapes are
+    /// all such a ray can meet first (they hold it, and nothing else comes near them), only
+    /// they are tested, without the BVH; the hit is the same.
+    #[inline]
+    pub fn intersect_in(&self, medium: u32, ray: &Ray, t_max: f64) -> Option<Hit> {
+        let Some(Some(own)) = self.built.enclosures.get(medium as usize) else {
+            return self.intersect(ray, t_max);
+        };
+        let mut best: Option<Hit> = None;
+        for &shape in own.iter() {
+            let tm = best.map_or(t_max, |h| h.t);
+            if let Some(mut h) = self.built.shapes[shape as usize].intersect_primitive(0, ray, tm) {
+                h.shape = shape;
+                best = Some(h);
+            }
+        }
+        best
+    }
+
     /// A lower bound on the distance from `p` to every surface of the scene [mm]: a ray from
     /// `p` shorter than it meets nothing, so a random walk need not intersect the scene for
     /// such a flight (Geant4's "safety"). 0 where no bound is known (meshes, or more than
@@ -478,11 +550,13 @@ impl Scene {
         (d * (1.0 - 1e-9) - 1e-9).max(0.0)
     }
 
-    /// The first surface from `o` along unit `d` within `t_max` [mm]: (hit point, normal), the
-    /// face finder of a kernel clip ([`KernelClip`](crate::photon_map::KernelClip)).
+    /// The first surface from `o` (in `medium`) along unit `d` within `t_max` [mm]: (hit
+    /// point, normal), the face finder of a kernel clip
+    /// ([`KernelClip`](crate::photon_map::KernelClip)).
     #[inline]
-    pub fn first_face(&self, o: Vec3, d: Vec3, t_max: f64) -> Option<(Vec3, Vec3)> {
-        self.intersect(&Ray::new(o, d), t_max).map(|h| (h.p, h.n))
+    pub fn first_face(&self, medium: u32, o: Vec3, d: Vec3, t_max: f64) -> Option<(Vec3, Vec3)> {
+        self.intersect_in(medium, &Ray::new(o, d), t_max)
+            .map(|h| (h.p, h.n))
     }
 
     /// Whether any surface lies on the ray with t in (0, t_max).
@@ -717,6 +791,81 @@ mod tests {
         assert!((hi - Vec3::new(3.0, 1.0, 1.0)).length() < 1e-12);
         assert!(scene.occluded(&Ray::new(Vec3::new(10.0, 0.0, 0.0), -Vec3::X), 7.5));
         assert!(!scene.occluded(&Ray::new(Vec3::new(10.0, 0.0, 0.0), -Vec3::X), 6.5));
+    }
+
+    #[test]
+    fn intersect_in_a_walled_off_medium_equals_the_bvh() {
+        use crate::rng::Stream;
+        let shape = |g: Geometry, b: Boundary| ShapeInstance::new("s", g, None, b).unwrap();
+        let disc = |x: f64, z: f64| {
+            Geometry::Cylinder(Cylinder {
+                center: Vec3::new(x, 0.0, z),
+                axis: Vec3::Z,
+                radius: 5.0,
+                height: 5.0,
+            })
+        };
+        let inside = |m: u32| Boundary::Dielectric {
+            inside: m,
+            outside: 0,
+        };
+        let shapes = vec![
+            shape(
+                Geometry::Quad(Quad {
+                    corner: Vec3::new(-100.0, -100.0, -0.1),
+                    u: Vec3::new(200.0, 0.0, 0.0),
+                    v: Vec3::new(0.0, 200.0, 0.0),
+                }),
+                opaque(),
+            ),
+            shape(disc(-8.0, 0.01), inside(1)),
+            shape(disc(8.0, 5.0), inside(1)),
+            // a ball resting on the table: its box touches the table's
+            shape(
+                Geometry::Sphere(Sphere {
+                    center: Vec3::new(0.0, 20.0, 0.9),
+                    radius: 1.0,
+                }),
+                inside(2),
+            ),
+        ];
+        let glass = Medium::new("", 0.1, 1.0, 1.5, PhaseFunction::Isotropic).unwrap();
+        let media = vec![air(), glass, glass];
+        let cam = Camera::new(Vec3::new(0.0, -40.0, 35.0), Vec3::ZERO, Vec3::Z, 30.0, 8, 8);
+        let scene = Scene::new(cam.unwrap(), media, lamb(), shapes, vec![point()], 0).unwrap();
+        let own = |m: usize| scene.built.enclosures.get(m).cloned().flatten();
+        assert_eq!(own(0), None, "the ambient medium");
+        assert_eq!(
+            own(1).as_deref(),
+            Some(&[1u32, 2][..]),
+            "two discs clear of all else"
+        );
+        assert_eq!(own(2), None, "a ball whose box touches the table");
+        // rays from inside either disc, near its faces and rim too: the same hit, bit for bit
+        let mut rng = Stream::new(11, 0, 0);
+        for i in 0..20_000 {
+            let [u, v] = rng.uniform2();
+            let (rho, phi) = (5.0 * u.sqrt() * (1.0 - 1e-9), std::f64::consts::TAU * v);
+            let (x0, z0) = if i % 2 == 0 { (-8.0, 0.01) } else { (8.0, 5.0) };
+            let o = Vec3::new(
+                x0 + rho * phi.cos(),
+                rho * phi.sin(),
+                z0 + 5.0 * rng.uniform(),
+            );
+            let d = crate::sampling::uniform_sphere(rng.uniform2());
+            let t_max = if i % 3 == 0 {
+                f64::INFINITY
+            } else {
+                3.0 * rng.uniform()
+            };
+            let ray = Ray::new(o, d);
+            let (a, b) = (
+                scene.intersect(&ray, t_max),
+                scene.intersect_in(1, &ray, t_max),
+            );
+            let key = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.shape, h.p, h.n));
+            assert_eq!(key(a), key(b), "ray {i} from {o} along {d}");
+        }
     }
 
     #[test]

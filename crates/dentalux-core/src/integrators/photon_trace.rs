@@ -233,7 +233,7 @@ fn trace_batch(
                 let hit = if flight_reach(s) < clear {
                     None
                 } else {
-                    scene.intersect(&ray, flight_reach(s))
+                    scene.intersect_in(medium, &ray, flight_reach(s))
                 };
                 let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
                 if sigma_t > 0.0 && s < t_hit {

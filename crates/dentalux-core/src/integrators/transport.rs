@@ -122,7 +122,7 @@ pub fn straight_transmittance(scene: &Scene, p: Vec3, d: Vec3, dist: f64, medium
     let mut tr = 1.0;
     for _ in 0..MAX_SHADOW_CROSSINGS {
         let sigma_t = scene.media[medium as usize].sigma_t();
-        let Some(hit) = scene.intersect(&ray, left) else {
+        let Some(hit) = scene.intersect_in(medium, &ray, left) else {
             return tr * (-sigma_t * left).exp();
         };
         tr *= (-sigma_t * hit.t).exp();
@@ -157,7 +157,7 @@ pub fn eq13_transmittance(scene: &Scene, p: Vec3, d: Vec3, dist: f64, medium: u3
     let mut tr = 1.0;
     for _ in 0..MAX_SHADOW_CROSSINGS {
         let sigma_t = scene.media[medium as usize].sigma_t();
-        let Some(hit) = scene.intersect(&ray, left) else {
+        let Some(hit) = scene.intersect_in(medium, &ray, left) else {
             return tr * (-sigma_t * left).exp();
         };
         match scene.boundary(hit.shape) {

@@ -56,7 +56,7 @@ pub fn radiance_with(scene: &Scene, faces: &PlanarFaces, ray: &Ray, rng: &mut St
     for _ in 0..MAX_EVENTS {
         let m = &scene.media[medium as usize];
         let s = sample_exponential(rng.uniform_open0(), m.sigma_t());
-        let hit = scene.intersect(&ray, flight_reach(s));
+        let hit = scene.intersect_in(medium, &ray, flight_reach(s));
         let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
         let t_seg = s.min(t_hit);
         if count_emission && !planar_covered {

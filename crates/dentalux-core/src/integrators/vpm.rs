@@ -364,7 +364,7 @@ impl<'a> Vpm<'a> {
         let mut entry: Option<(Vec3, Vec3)> = None;
         loop {
             let m = &scene.media[medium as usize];
-            let hit = scene.intersect(&ray, f64::INFINITY);
+            let hit = scene.intersect_in(medium, &ray, f64::INFINITY);
             sc.rays += 1;
             let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
             let sigma_t = m.sigma_t();
@@ -538,7 +538,7 @@ impl<'a> Vpm<'a> {
             .min_by(|a, b| depth(a).total_cmp(&depth(b)))
             .copied()
             .filter(|_| self.params.layer > 0.0);
-        let faces = |o, d, t_max| scene.first_face(o, d, t_max);
+        let faces = |o, d, t_max| scene.first_face(medium, o, d, t_max);
         let clip = self.kernel_clip(&faces, rng);
         let planes = near.map(|near| Planes {
             near,
@@ -619,7 +619,7 @@ impl<'a> Vpm<'a> {
                 return l;
             };
             let scene = self.scene;
-            let faces = |o, d, t_max| scene.first_face(o, d, t_max);
+            let faces = |o, d, t_max| scene.first_face(medium, o, d, t_max);
             let clip = self.kernel_clip(&faces, rng);
             let e = b.estimate(
                 map,
@@ -692,7 +692,7 @@ impl<'a> Vpm<'a> {
             } else if self.params.clip {
                 // rays along the surface start just off it, on the lit side
                 let lift = n * scene.eps;
-                let faces = |o: Vec3, d, t_max| scene.first_face(o + lift, d, t_max);
+                let faces = |o: Vec3, d, t_max| scene.first_face(medium, o + lift, d, t_max);
                 let clip = KernelClip {
                     hit: &faces,
                     u: rng.uniform(),
