@@ -16,6 +16,10 @@ const MAX_LEAF: usize = 4;
 const BINS: usize = 12;
 /// Deepest tree allowed (the traversal stack holds this many entries).
 const MAX_DEPTH: usize = 96;
+/// At most this many primitives are searched by testing each one's box in slot order
+/// instead of a traversal (the Fig. 3 scene's four shapes: the tree's inner boxes and its
+/// stack cost more than they save there).
+const SCAN: usize = 8;
 
 /// One flattened node, 32 bytes: bounds stored as f32 rounded outwards (so the box still
 /// holds its f64 contents; intersections themselves stay f64), which halves the memory a
@@ -84,6 +88,9 @@ impl Node {
 pub struct Bvh {
     nodes: Vec<Node>,
     order: Vec<u32>,
+    /// Each slot's box (rounded outwards as the nodes' are) when there are at most
+    /// [`SCAN`] primitives; empty otherwise.
+    scan: Vec<Node>,
 }
 
 struct Item {
@@ -106,7 +113,15 @@ impl Bvh {
         if !bounds.is_empty() {
             build_node(&mut nodes, &mut items, &mut order, 0, bounds.len(), 0);
         }
-        Self { nodes, order }
+        let scan = if bounds.len() <= SCAN {
+            order
+                .iter()
+                .map(|&p| Node::new(&bounds[p as usize], 0, 1))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Self { nodes, order, scan }
     }
 
     /// The primitive in each slot: leaves hold consecutive slots.
@@ -177,6 +192,20 @@ impl Bvh {
             return;
         }
         let inv_d = ray.d.recip();
+        if !self.scan.is_empty() {
+            for (slot, node) in self.scan.iter().enumerate() {
+                if node.bounds().hit_distance(ray.o, inv_d, *t_max).is_finite() {
+                    let (closer, stop) = visit(slot as u32, *t_max);
+                    if let Some(t) = closer {
+                        *t_max = t;
+                    }
+                    if stop {
+                        return;
+                    }
+                }
+            }
+            return;
+        }
         let neg = [ray.d.x < 0.0, ray.d.y < 0.0, ray.d.z < 0.0];
         let mut stack = [0u32; MAX_DEPTH + 2];
         let mut top = 0;
@@ -352,15 +381,23 @@ mod tests {
 
     #[test]
     fn nearest_and_any_match_brute_force_on_random_spheres() {
+        // 500 spheres (a traversal) and 6 large ones (the scan of SCAN or fewer)
+        for (count, size) in [(500, 0.8), (6, 6.0)] {
+            brute_force_check(count, size);
+        }
+    }
+
+    fn brute_force_check(count: usize, size: f64) {
         let mut rng = Stream::new(11, 0, 0);
-        let spheres: Vec<Sphere> = (0..500)
+        let spheres: Vec<Sphere> = (0..count)
             .map(|_| Sphere {
                 center: Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 20.0 - 10.0,
-                radius: 0.05 + rng.uniform() * 0.8,
+                radius: 0.05 + rng.uniform() * size,
             })
             .collect();
         let bvh = Bvh::build(&spheres.iter().map(|s| s.bounds()).collect::<Vec<_>>());
-        assert!(bvh.node_count() > 100);
+        assert!(count <= SCAN || bvh.node_count() > 100);
+        assert_eq!(bvh.scan.len(), if count <= SCAN { count } else { 0 });
         for _ in 0..5000 {
             let o = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 30.0 - 15.0;
             let ray = Ray::new(o, uniform_sphere(rng.uniform2()));
