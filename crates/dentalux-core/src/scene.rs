@@ -304,6 +304,16 @@ struct Built {
     enclosures: Vec<Option<Box<[u32]>>>,
 }
 
+/// The least of `shapes[i]`'s clearances from `p` over `which`, shrunk by a margin far above
+/// the intersection routines' rounding (0 where a shape has none).
+#[inline]
+fn clearance_of(shapes: &[ShapeInstance], p: Vec3, which: impl Iterator<Item = u32>) -> f64 {
+    let d = which
+        .map(|i| shapes[i as usize].clearance(p).unwrap_or(0.0))
+        .fold(f64::INFINITY, f64::min);
+    (d * (1.0 - 1e-9) - 1e-9).max(0.0)
+}
+
 /// Per medium index: the analytic shapes that hold the medium inside, when they are all a
 /// walk in it can meet first. That is so when the medium is inside those shapes only, is
 /// nobody's outside nor the camera's, and no other shape's box touches theirs: a walk in
@@ -541,13 +551,19 @@ impl Scene {
         if !self.built.clearance {
             return 0.0;
         }
-        let d = self
-            .built
-            .shapes
-            .iter()
-            .map(|s| s.clearance(p).unwrap_or(0.0))
-            .fold(f64::INFINITY, f64::min);
-        (d * (1.0 - 1e-9) - 1e-9).max(0.0)
+        clearance_of(&self.built.shapes, p, 0..self.built.shapes.len() as u32)
+    }
+
+    /// [`Scene::clearance`] for a point in `medium`: where the medium's shapes hold it alone
+    /// ([`Scene::intersect_in`]), the nearest surface is one of theirs (every other one lies
+    /// outside their boxes, beyond their surface), so only they are asked, whatever the
+    /// scene's size.
+    #[inline]
+    pub fn clearance_in(&self, medium: u32, p: Vec3) -> f64 {
+        match self.built.enclosures.get(medium as usize) {
+            Some(Some(own)) => clearance_of(&self.built.shapes, p, own.iter().copied()),
+            _ => self.clearance(p),
+        }
     }
 
     /// The first surface from `o` (in `medium`) along unit `d` within `t_max` [mm]: (hit
@@ -865,6 +881,13 @@ mod tests {
             );
             let key = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.shape, h.p, h.n));
             assert_eq!(key(a), key(b), "ray {i} from {o} along {d}");
+            // the discs' own clearance bounds every surface, and no less than the scan's
+            let c = scene.clearance_in(1, o);
+            assert!(c >= scene.clearance(o) && c > 0.0, "clearance at {o}");
+            assert!(
+                scene.intersect(&ray, c).is_none(),
+                "a surface within {c} of {o}"
+            );
         }
     }
 

@@ -289,7 +289,7 @@ fn trace_batch(
                     clear = if clear - s >= 1.0 / sigma_t {
                         clear - s
                     } else {
-                        scene.clearance(x)
+                        scene.clearance_in(medium, x)
                     };
                     ray = Ray { o: x, d };
                     scattered = true;
