@@ -228,6 +228,13 @@ impl ShapeInstance {
         }
     }
 
+    /// World bounds of the whole shape (all its primitives).
+    pub fn bounds(&self) -> Aabb {
+        (0..self.primitive_count())
+            .map(|k| self.primitive_bounds(k))
+            .fold(Aabb::EMPTY, |a, b| a.union(&b))
+    }
+
     /// Intersect primitive `prim` with a world ray; world hit (shape index left 0).
     #[inline]
     pub fn intersect_primitive(&self, prim: usize, ray: &Ray, t_max: f64) -> Option<Hit> {
@@ -321,10 +328,7 @@ fn clearance_of(shapes: &[ShapeInstance], p: Vec3, which: impl Iterator<Item = u
 /// surface lies in the shape's box, where nothing else is. `None` where any of that fails
 /// (meshes included: their triangles want the BVH).
 fn enclosures(shapes: &[ShapeInstance], ambient: u32) -> Vec<Option<Box<[u32]>>> {
-    let bounds: Vec<Aabb> = shapes
-        .iter()
-        .map(|s| (0..s.primitive_count()).fold(Aabb::EMPTY, |b, k| b.union(&s.primitive_bounds(k))))
-        .collect();
+    let bounds: Vec<Aabb> = shapes.iter().map(ShapeInstance::bounds).collect();
     // closed boxes, widened by far more than any rounding of the bounds: touching counts
     let touch = |a: &Aabb, b: &Aabb| {
         let pad = 1e-6 * (1.0 + a.max.abs().max_element() + b.max.abs().max_element());
@@ -509,12 +513,7 @@ impl Scene {
                         shape,
                     }
                 }
-                Prim::Shape { shape } => {
-                    let mut h =
-                        self.built.shapes[shape as usize].intersect_primitive(0, ray, tm)?;
-                    h.shape = shape;
-                    h
-                }
+                Prim::Shape { shape } => self.shape_hit(shape, ray, tm)?,
             };
             best = Some(h);
             Some(h.t)
@@ -533,12 +532,17 @@ impl Scene {
         let mut best: Option<Hit> = None;
         for &shape in own.iter() {
             let tm = best.map_or(t_max, |h| h.t);
-            if let Some(mut h) = self.built.shapes[shape as usize].intersect_primitive(0, ray, tm) {
-                h.shape = shape;
-                best = Some(h);
-            }
+            best = self.shape_hit(shape, ray, tm).or(best);
         }
         best
+    }
+
+    /// The hit of analytic shape `shape` (one primitive) closer than `t_max`, with its index.
+    #[inline]
+    fn shape_hit(&self, shape: u32, ray: &Ray, t_max: f64) -> Option<Hit> {
+        let mut h = self.built.shapes[shape as usize].intersect_primitive(0, ray, t_max)?;
+        h.shape = shape;
+        Some(h)
     }
 
     /// A lower bound on the distance from `p` to every surface of the scene [mm]: a ray from

@@ -13,7 +13,7 @@
 //! (photons that reach the media by way of the walls included) while the media receive many
 //! more photons per emitted photon. Spot lights emit as usual (their cone is already narrow).
 
-use crate::geometry::{Aabb, Ray, Vec3};
+use crate::geometry::{Ray, Vec3};
 use crate::lights::Light;
 use crate::math::{direction_about, Frame};
 use crate::sampling::{cosine_hemisphere, uniform_sphere};
@@ -77,9 +77,7 @@ impl Aim {
             if !s.is_closed() || !(scattering(inside) || scattering(outside)) {
                 continue;
             }
-            let b = (0..s.primitive_count())
-                .map(|i| s.primitive_bounds(i))
-                .fold(Aabb::EMPTY, |a, b| a.union(&b));
+            let b = s.bounds();
             let radius = 0.5 * (b.max - b.min).length();
             if radius.is_finite() && radius > 0.0 {
                 spheres.push(Target {
