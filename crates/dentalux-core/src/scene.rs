@@ -8,7 +8,8 @@
 use crate::camera::Camera;
 use crate::error::{check_positive, Error, Result};
 use crate::geometry::bvh::Bvh;
-use crate::geometry::mesh::{intersect_corners, Topology, TriangleMesh};
+use crate::geometry::clearance_grid::ClearanceGrid;
+use crate::geometry::mesh::{distance_to_corners, intersect_corners, Topology, TriangleMesh};
 use crate::geometry::shapes::{BoxShape, Cylinder, LocalHit, Quad, Sphere};
 use crate::geometry::transform::Transform;
 use crate::geometry::{Aabb, Hit, Ray, Vec3};
@@ -307,6 +308,9 @@ struct Built {
     /// BVH primitives in slot order (a leaf's primitives are contiguous).
     prims: Vec<Prim>,
     bvh: Bvh,
+    /// Distance bounds on a voxel grid over the media, for scenes with meshes
+    /// ([`clearance_grid`]).
+    grid: Option<ClearanceGrid>,
     /// Per medium index, the shapes a walk in that medium can only meet ([`enclosures`]).
     enclosures: Vec<Option<Box<[u32]>>>,
 }
@@ -315,10 +319,67 @@ struct Built {
 /// the intersection routines' rounding (0 where a shape has none).
 #[inline]
 fn clearance_of(shapes: &[ShapeInstance], p: Vec3, which: impl Iterator<Item = u32>) -> f64 {
-    let d = which
-        .map(|i| shapes[i as usize].clearance(p).unwrap_or(0.0))
-        .fold(f64::INFINITY, f64::min);
+    shrink(
+        which
+            .map(|i| shapes[i as usize].clearance(p).unwrap_or(0.0))
+            .fold(f64::INFINITY, f64::min),
+    )
+}
+
+/// A distance bound less a margin far above the intersection routines' rounding.
+#[inline]
+fn shrink(d: f64) -> f64 {
     (d * (1.0 - 1e-9) - 1e-9).max(0.0)
+}
+
+/// The clearance grid of a scene with meshes (`None` without): over the shapes that hold
+/// media, where walks scatter, with every primitive's box marked, except that an analytic
+/// shape whose box covers more than a 64th of the region bounds it through its own
+/// clearance (a box around the scene would otherwise mark every voxel).
+fn clearance_grid(shapes: &[ShapeInstance], bvh: &Bvh, prims: &[Prim]) -> Option<ClearanceGrid> {
+    if !shapes
+        .iter()
+        .any(|s| matches!(s.geometry, Geometry::Mesh(_)))
+    {
+        return None;
+    }
+    let region = shapes
+        .iter()
+        .filter(|s| matches!(s.boundary, Boundary::Dielectric { .. }))
+        .map(ShapeInstance::bounds)
+        .fold(Aabb::EMPTY, |a, b| a.union(&b));
+    let volume = |b: &Aabb| {
+        let e = (b.max.min(region.max) - b.min.max(region.min)).max(Vec3::ZERO);
+        e.x * e.y * e.z
+    };
+    let large = |s: u32| {
+        let s = &shapes[s as usize];
+        s.clearance(Vec3::ZERO).is_some() && volume(&s.bounds()) > volume(&region) / 64.0
+    };
+    let marked = prims.iter().filter_map(|p| match *p {
+        Prim::Triangle { corners, .. } => Some(
+            Aabb::EMPTY
+                .grow(corners[0])
+                .grow(corners[1])
+                .grow(corners[2]),
+        ),
+        Prim::Shape { shape } => (!large(shape)).then(|| shapes[shape as usize].bounds()),
+    });
+    let exact = |p: Vec3, reach: f64| {
+        bvh.distance_bound(p, reach, |slot| match prims[slot as usize] {
+            Prim::Triangle {
+                corners: [a, b, c], ..
+            } => distance_to_corners(a, b, c, p),
+            Prim::Shape { shape } => shapes[shape as usize].clearance(p).unwrap_or(0.0),
+        })
+    };
+    let mut grid = ClearanceGrid::build(region, marked, exact)?;
+    for (i, s) in shapes.iter().enumerate() {
+        if large(i as u32) {
+            grid.limit(|c| s.clearance(c).unwrap_or(0.0));
+        }
+    }
+    Some(grid)
 }
 
 /// Per medium index: the analytic shapes that hold the medium inside, when they are all a
@@ -434,6 +495,7 @@ impl Scene {
             && shapes.iter().all(|s| s.clearance(Vec3::ZERO).is_some());
         let built = Arc::new(Built {
             enclosures: enclosures(&shapes, ambient_medium),
+            grid: clearance_grid(&shapes, &bvh, &prims),
             shapes,
             clearance,
             prims,
@@ -547,15 +609,20 @@ impl Scene {
 
     /// A lower bound on the distance from `p` to every surface of the scene [mm]: a ray from
     /// `p` shorter than it meets nothing, so a random walk need not intersect the scene for
-    /// such a flight (Geant4's "safety"). 0 where no bound is known (meshes, or more than
-    /// [`CLEARANCE_SHAPES`] shapes, where a scan would cost more than the BVH). Shrunk by a
-    /// margin far above the intersection routines' rounding.
+    /// such a flight (Geant4's "safety"). A few analytic shapes ([`CLEARANCE_SHAPES`]) are
+    /// asked in turn; a scene with meshes looks its grid up ([`clearance_grid`]); 0 where
+    /// neither applies (more analytic shapes, where a scan would cost more than the BVH).
+    /// Shrunk by a margin far above the intersection routines' rounding.
     #[inline]
     pub fn clearance(&self, p: Vec3) -> f64 {
-        if !self.built.clearance {
-            return 0.0;
+        let built = &*self.built;
+        if built.clearance {
+            clearance_of(&built.shapes, p, 0..built.shapes.len() as u32)
+        } else if let Some(grid) = &built.grid {
+            shrink(grid.clearance(p))
+        } else {
+            0.0
         }
-        clearance_of(&self.built.shapes, p, 0..self.built.shapes.len() as u32)
     }
 
     /// [`Scene::clearance`] for a point in `medium`: where the medium's shapes hold it alone
@@ -575,6 +642,10 @@ impl Scene {
     /// ([`KernelClip`](crate::photon_map::KernelClip)).
     #[inline]
     pub fn first_face(&self, medium: u32, o: Vec3, d: Vec3, t_max: f64) -> Option<(Vec3, Vec3)> {
+        // a grid lookup costs less than the BVH, and a kernel's rays are short
+        if self.built.grid.is_some() && t_max < self.clearance(o) {
+            return None;
+        }
         self.intersect_in(medium, &Ray::new(o, d), t_max)
             .map(|h| (h.p, h.n))
     }

@@ -168,7 +168,7 @@ fn a_flight_searched_to_its_collision_sees_what_a_search_to_infinity_sees() {
 /// point meets a surface within it (analytic shapes, one of them transformed), and it is 0
 /// where the scene holds a mesh.
 #[test]
-fn clearance_is_a_lower_bound_and_zero_with_meshes() {
+fn clearance_is_a_lower_bound_with_shapes_and_meshes() {
     use dentalux_core::geometry::shapes::{Cylinder, Quad};
     use dentalux_core::geometry::transform::Transform;
     let dielectric = Boundary::Dielectric {
@@ -228,5 +228,27 @@ fn clearance_is_a_lower_bound_and_zero_with_meshes() {
         ShapeInstance::new("s", sphere, None, dielectric).unwrap(),
         ShapeInstance::new("m", Geometry::Mesh(mesh), None, dielectric).unwrap(),
     ]);
+    // outside the grid over the media: no bound; inside the faceted ball, which lies
+    // within its sphere (vertices on it): below the sphere's distance, and no surface nearer
     assert_eq!(with_mesh.clearance(Vec3::new(20.0, 0.0, 0.0)), 0.0);
+    let centre = Vec3::new(5.0, 5.0, 5.0);
+    for _ in 0..2000 {
+        let p = centre + uniform_sphere(rng.uniform2()) * 0.99 * rng.uniform();
+        let c = with_mesh.clearance(p);
+        assert!(c <= 1.0 - (p - centre).length(), "{c} at {p}");
+        for _ in 0..20 {
+            let ray = Ray::new(p, uniform_sphere(rng.uniform2()));
+            assert!(
+                with_mesh.intersect(&ray, flight_reach(c)).is_none(),
+                "{p}: {c}"
+            );
+        }
+    }
+    // deep inside, the bound is the Chebyshev one to the facets' boxes (at least 1/√3 of
+    // the maximum-norm distance, less a few voxels)
+    let c = with_mesh.clearance(centre);
+    assert!(
+        c > 0.3,
+        "the centre of a ball of radius 1 (16 x 8 facets): {c}"
+    );
 }

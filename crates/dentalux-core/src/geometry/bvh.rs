@@ -180,6 +180,58 @@ impl Bvh {
         hit
     }
 
+    /// A lower bound on the distance from `p` to every primitive, at most `reach`:
+    /// `dist(slot)` is a lower bound on the distance to the primitive in `slot` (as in
+    /// [`Bvh::nearest`]). Subtrees whose box lies at least the bound found so far from `p`
+    /// are skipped: everything in them is at least that far.
+    pub fn distance_bound<F: FnMut(u32) -> f64>(&self, p: Vec3, reach: f64, mut dist: F) -> f64 {
+        let mut best = reach;
+        let slots: &[Node] = if self.scan.is_empty() {
+            &[]
+        } else {
+            &self.scan
+        };
+        for (slot, node) in slots.iter().enumerate() {
+            if node.bounds().distance2(p) < best * best {
+                best = best.min(dist(slot as u32));
+            }
+        }
+        if self.nodes.is_empty() || !self.scan.is_empty() {
+            return best;
+        }
+        let mut stack = [(0u32, 0.0f64); MAX_DEPTH + 2];
+        let mut top = 1;
+        stack[0] = (0, self.nodes[0].bounds().distance2(p));
+        while top > 0 {
+            top -= 1;
+            let (n, d2) = stack[top];
+            if d2 >= best * best {
+                continue;
+            }
+            let node = &self.nodes[n as usize];
+            if node.count() > 0 {
+                let first = node.offset as usize;
+                for slot in first..first + node.count() as usize {
+                    best = best.min(dist(slot as u32));
+                }
+                continue;
+            }
+            let (a, b) = (n + 1, node.offset);
+            let da = self.nodes[a as usize].bounds().distance2(p);
+            let db = self.nodes[b as usize].bounds().distance2(p);
+            // the nearer child on top of the stack: it is searched first
+            let (near, far) = if da <= db {
+                ((a, da), (b, db))
+            } else {
+                ((b, db), (a, da))
+            };
+            stack[top] = far;
+            stack[top + 1] = near;
+            top += 2;
+        }
+        best
+    }
+
     /// Core traversal: `visit` returns (a new closer t_max, stop now).
     #[inline]
     fn walk<F: FnMut(u32, f64) -> (Option<f64>, bool)>(
@@ -425,6 +477,23 @@ mod tests {
                     .is_some()
             });
             assert_eq!(any, brute.is_finite());
+            // the distance to the nearest sphere's surface, skipping far subtrees, is exact
+            let gap = |i: u32| {
+                let s = &spheres[bvh.order()[i as usize] as usize];
+                ((o - s.center).length() - s.radius).abs()
+            };
+            let least = (0..count as u32).map(gap).fold(f64::INFINITY, f64::min);
+            let mut asked = 0;
+            let got = bvh.distance_bound(o, f64::INFINITY, |i| {
+                asked += 1;
+                gap(i)
+            });
+            assert_eq!(got, least);
+            assert!(
+                count <= SCAN || asked < count / 4,
+                "{asked} of {count} asked"
+            );
+            assert_eq!(bvh.distance_bound(o, 0.5 * least, gap), 0.5 * least);
         }
     }
 

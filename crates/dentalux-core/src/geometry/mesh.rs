@@ -223,6 +223,37 @@ impl TriangleMesh {
     }
 }
 
+/// Distance from `p` to the triangle (a, b, c) [mm]: to its plane where `p`'s projection
+/// falls inside the triangle, else to the nearest edge.
+pub fn distance_to_corners(a: Vec3, b: Vec3, c: Vec3, p: Vec3) -> f64 {
+    let (e1, e2, w) = (b - a, c - a, p - a);
+    let n = e1.cross(e2);
+    let nn = n.dot(n);
+    if nn > 0.0 {
+        // barycentric weights of b and c at the projection of p
+        let s = w.cross(e2).dot(n) / nn;
+        let t = e1.cross(w).dot(n) / nn;
+        if s >= 0.0 && t >= 0.0 && s + t <= 1.0 {
+            return w.dot(n).abs() / nn.sqrt();
+        }
+    }
+    segment_distance(a, b, p)
+        .min(segment_distance(b, c, p))
+        .min(segment_distance(c, a, p))
+}
+
+/// Distance from `p` to the segment from `a` to `b`.
+fn segment_distance(a: Vec3, b: Vec3, p: Vec3) -> f64 {
+    let ab = b - a;
+    let len2 = ab.dot(ab);
+    let t = if len2 > 0.0 {
+        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + ab * t)).length()
+}
+
 /// Möller–Trumbore on corners (a, b, c): (t, b1, b2) of the hit with t in (0, t_max), b1 and
 /// b2 the barycentric weights of b and c.
 #[inline]
@@ -259,6 +290,36 @@ pub fn intersect_corners(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn triangle_distance_is_the_least_over_the_triangle() {
+        use crate::rng::Stream;
+        let mut rng = Stream::new(3, 0, 0);
+        let mut point = || Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0;
+        for _ in 0..300 {
+            let (a, b, c, p) = (point(), point(), point(), point());
+            let d = distance_to_corners(a, b, c, p);
+            // brute force over a grid of barycentric points, spacing h along each edge
+            let n = 200;
+            let mut least = f64::INFINITY;
+            for i in 0..=n {
+                for j in 0..=n - i {
+                    let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
+                    least = least.min((a + (b - a) * u + (c - a) * v - p).length());
+                }
+            }
+            let h = ((b - a).length() + (c - a).length()) / n as f64;
+            assert!(d <= least + 1e-12 && d >= least - h, "{d} against {least}");
+        }
+        // on the triangle: 0; in its plane beyond an edge: the edge's distance; above it
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        assert_eq!(
+            distance_to_corners(a, b, c, Vec3::new(0.25, 0.25, 0.0)),
+            0.0
+        );
+        assert_eq!(distance_to_corners(a, b, c, Vec3::new(0.5, -2.0, 0.0)), 2.0);
+        assert_eq!(distance_to_corners(a, b, c, Vec3::new(0.2, 0.3, -0.7)), 0.7);
+    }
 
     fn tetra() -> TriangleMesh {
         TriangleMesh {

@@ -10,6 +10,7 @@
 //!   the surface they start on (no self-intersection acne).
 
 pub mod bvh;
+pub mod clearance_grid;
 pub mod mesh;
 pub mod shapes;
 pub mod transform;
@@ -115,6 +116,12 @@ impl Aabb {
             Vec3::new(a.x, b.y, b.z),
             Vec3::new(b.x, b.y, b.z),
         ]
+    }
+    /// Squared distance from `p` to the box (0 inside it).
+    #[inline]
+    pub fn distance2(&self, p: Vec3) -> f64 {
+        let d = (self.min - p).max(p - self.max).max(Vec3::ZERO);
+        d.dot(d)
     }
     /// Slab test: the entry distance if the ray (with precomputed `inv_d` = 1/d) meets the
     /// box within (0, t_max), else +∞.
