@@ -357,12 +357,9 @@ fn clearance_grid(shapes: &[ShapeInstance], bvh: &Bvh, prims: &[Prim]) -> Option
         s.clearance(Vec3::ZERO).is_some() && volume(&s.bounds()) > volume(&region) / 64.0
     };
     let marked = prims.iter().filter_map(|p| match *p {
-        Prim::Triangle { corners, .. } => Some(
-            Aabb::EMPTY
-                .grow(corners[0])
-                .grow(corners[1])
-                .grow(corners[2]),
-        ),
+        Prim::Triangle { shape, index, .. } => {
+            Some(shapes[shape as usize].primitive_bounds(index as usize))
+        }
         Prim::Shape { shape } => (!large(shape)).then(|| shapes[shape as usize].bounds()),
     });
     let exact = |p: Vec3, reach: f64| {

@@ -186,12 +186,7 @@ impl Bvh {
     /// are skipped: everything in them is at least that far.
     pub fn distance_bound<F: FnMut(u32) -> f64>(&self, p: Vec3, reach: f64, mut dist: F) -> f64 {
         let mut best = reach;
-        let slots: &[Node] = if self.scan.is_empty() {
-            &[]
-        } else {
-            &self.scan
-        };
-        for (slot, node) in slots.iter().enumerate() {
+        for (slot, node) in self.scan.iter().enumerate() {
             if node.bounds().distance2(p) < best * best {
                 best = best.min(dist(slot as u32));
             }

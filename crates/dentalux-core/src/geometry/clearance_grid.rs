@@ -107,7 +107,7 @@ impl ClearanceGrid {
         }
         while let Some(i) = queue.pop_front() {
             let next = steps[i].saturating_add(1);
-            let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
+            let [x, y, z] = self.coords(i);
             for zz in z.saturating_sub(1)..=(z + 1).min(nz - 1) {
                 for yy in y.saturating_sub(1)..=(y + 1).min(ny - 1) {
                     for xx in x.saturating_sub(1)..=(x + 1).min(nx - 1) {
@@ -141,10 +141,16 @@ impl ClearanceGrid {
         x + self.dims[0] * (y + self.dims[1] * z)
     }
 
+    /// The inverse of [`Self::index`].
+    #[inline]
+    fn coords(&self, i: usize) -> [usize; 3] {
+        let [nx, ny, _] = self.dims;
+        [i % nx, (i / nx) % ny, i / (nx * ny)]
+    }
+
     #[inline]
     fn centre_of(&self, i: usize) -> Vec3 {
-        let [nx, ny, _] = self.dims;
-        let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
+        let [x, y, z] = self.coords(i);
         self.lo + Vec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5) * self.side
     }
 
