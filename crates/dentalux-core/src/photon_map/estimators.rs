@@ -7,7 +7,7 @@
 
 use super::kernel::{disc_fraction_inside, inside_planes, prism_moments, rotated_circle};
 use super::kernel::{KernelClip, Planes, CLIP_RAYS};
-use super::tree::{Neighbours, Photon, PhotonMap};
+use super::tree::{direction_cosines, Neighbours, Photon, PhotonMap};
 use crate::math::{Frame, Vec3};
 use crate::phase::PhaseFunction;
 use std::f64::consts::PI;
@@ -205,14 +205,22 @@ impl PhotonMap {
         let half = [n.x, n.y, n.z].map(|c| t * c.abs() + big_r * (1.0 - c * c).max(0.0).sqrt());
         // the walk only collects the photons in the kernel; their phase weights are summed
         // a batch at a time, in the same order, so the walk's unpredictable branches do not
-        // stall the square roots and divisions of the weights
-        let mut batch = [(0.0f64, 0u32); LAYER_BATCH];
+        // stall the square roots and divisions of the weights, and those vectorise
+        let mut zs = [0.0f64; LAYER_BATCH];
+        let mut idx = [0u32; LAYER_BATCH];
         let mut len = 0;
         let photons = self.photons();
-        let mut sum = |batch: &[(f64, u32)]| {
-            for &(z, i) in batch {
-                let p = &photons[i as usize];
-                let w = phase.eval(p.direction().dot(wo)) * p.power as f64;
+        let mut sum = |zs: &[f64], idx: &[u32]| {
+            let mut bits = [0u32; LAYER_BATCH];
+            let mut w = [0.0f64; LAYER_BATCH];
+            let (bits, w) = (&mut bits[..idx.len()], &mut w[..idx.len()]);
+            for (b, &i) in bits.iter_mut().zip(idx) {
+                *b = photons[i as usize].direction_bits();
+            }
+            direction_cosines(bits, wo, w);
+            phase.eval_in_place(w);
+            for ((&w, &z), &i) in w.iter().zip(zs).zip(idx) {
+                let w = w * photons[i as usize].power as f64;
                 s0 += w;
                 s1 += w * z;
             }
@@ -223,15 +231,16 @@ impl PhotonMap {
             if z < a || z > b || d.dot(d) - z * z > big_r2 || skip == Some(p as *const Photon) {
                 return;
             }
-            batch[len] = (z, i as u32);
+            zs[len] = z;
+            idx[len] = i as u32;
             len += 1;
             e.count += 1;
             if len == LAYER_BATCH {
-                sum(&batch);
+                sum(&zs, &idx);
                 len = 0;
             }
         });
-        sum(&batch[..len]);
+        sum(&zs[..len], &idx[..len]);
         let [v, m1, m2] = planes
             .clip
             .and_then(|c| c.moments(x, n, a, b, big_r))

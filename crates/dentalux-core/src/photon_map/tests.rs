@@ -51,10 +51,13 @@ fn random_map(n: usize, seed: u64, clustered: bool) -> Vec<Photon> {
 }
 
 #[test]
-fn photon_is_compact_and_direction_roundtrips() {
+fn photon_is_compact_and_direction_roundtrips_and_batches() {
     const { assert!(PHOTON_BYTES <= 20) };
     let mut s = Stream::new(9, 0, 0);
     let mut worst: f64 = 0.0;
+    let w = Vec3::new(0.3, -0.5, 0.8).normalize();
+    let mut bits = Vec::new();
+    let mut dots = Vec::new();
     for i in 0..20_000 {
         let d = match i {
             0 => Vec3::Z,
@@ -67,8 +70,17 @@ fn photon_is_compact_and_direction_roundtrips() {
         p.set_axis(2);
         worst = worst.max(p.direction().angle_between(d));
         assert_eq!(p.axis(), 2);
+        bits.push(p.direction_bits());
+        dots.push(p.direction().dot(w));
     }
     assert!(worst < 2e-4, "worst direction error {worst} rad");
+    // the batch form the layer kernel uses gives the same numbers, bit for bit
+    let mut cos = vec![0.0; bits.len()];
+    super::tree::direction_cosines(&bits, w, &mut cos);
+    assert!(cos
+        .iter()
+        .zip(&dots)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
 }
 
 #[test]

@@ -11,6 +11,8 @@ pub const PHOTON_BYTES: usize = std::mem::size_of::<Photon>();
 /// Subtrees at most this long are scanned linearly instead of descended (32 against 16: an
 /// aimed Fig. 3 pass at 128x96, 0.98x the CPU time; 8: 1.05x).
 pub(super) const LEAF: usize = 32;
+// a leaf's photons fit one u32 bit mask (`for_each_within_box`)
+const _: () = assert!(LEAF <= 32);
 /// Subtrees at least this long are built in parallel (rayon::join).
 const PAR_BUILD: usize = 16_384;
 /// Bits per octahedral coordinate.
@@ -61,6 +63,15 @@ fn decode_dir(bits: u32) -> Vec3 {
     Vec3::new(x, y, z).normalize()
 }
 
+/// `out[j]` = the direction of `bits[j]` ([`Photon::direction_bits`]) dotted with `w`, the
+/// same numbers as [`Photon::direction`]`.dot(w)`: on plain arrays, so the decoding and
+/// normalising vectorise.
+pub(super) fn direction_cosines(bits: &[u32], w: Vec3, out: &mut [f64]) {
+    for (o, &b) in out.iter_mut().zip(bits) {
+        *o = decode_dir(b).dot(w);
+    }
+}
+
 impl Photon {
     /// A photon at `pos` [mm] that was travelling along the unit vector `dir`, carrying `power`.
     pub fn new(pos: Vec3, dir: Vec3, power: f64) -> Self {
@@ -78,7 +89,12 @@ impl Photon {
     /// Unit travel direction at the moment of storage (the incoming direction is its negative).
     #[inline]
     pub fn direction(&self) -> Vec3 {
-        decode_dir(self.packed & 0x3FFF_FFFF)
+        decode_dir(self.direction_bits())
+    }
+    /// The octahedral direction bits, for [`direction_cosines`].
+    #[inline]
+    pub(super) fn direction_bits(&self) -> u32 {
+        self.packed & 0x3FFF_FFFF
     }
     #[inline]
     pub(super) fn axis(&self) -> usize {
@@ -323,10 +339,20 @@ impl PhotonMap {
                 }
                 (lo, hi) = near;
             }
-            for (j, p) in ph[lo..hi].iter().enumerate() {
-                let d2 = dist2(&p.pos, &q);
-                if d2 <= out.bound {
-                    out.push(d2, (lo + j) as u32);
+            // the leaf's candidates under the bound as a bit mask without branches, then
+            // pushed in order; a push can tighten the bound, so each is checked again
+            let leaf = &ph[lo..hi];
+            let mut d2s = [0.0f32; LEAF];
+            let mut mask = 0u32;
+            for (j, p) in leaf.iter().enumerate() {
+                d2s[j] = dist2(&p.pos, &q);
+                mask |= ((d2s[j] <= out.bound) as u32) << j;
+            }
+            while mask != 0 {
+                let j = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                if d2s[j] <= out.bound {
+                    out.push(d2s[j], (lo + j) as u32);
                 }
             }
             loop {
@@ -377,10 +403,23 @@ impl PhotonMap {
             sp -= 1;
             let (lo, hi) = stack[sp];
             if hi - lo <= LEAF {
-                for (i, p) in self.photons[lo..hi].iter().enumerate() {
-                    if dist2(&p.pos, &q) <= r2 && !outside(p) {
-                        f(p, lo + i);
-                    }
+                // which of the leaf's photons are in, as a bit mask without branches (a
+                // branch per photon mispredicted about as often as it was taken), then
+                // visited in order
+                let leaf = &self.photons[lo..hi];
+                let mut mask = 0u32;
+                for (i, p) in leaf.iter().enumerate() {
+                    let d = [p.pos[0] - q[0], p.pos[1] - q[1], p.pos[2] - q[2]];
+                    let inside = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= r2)
+                        & (d[0].abs() <= h[0])
+                        & (d[1].abs() <= h[1])
+                        & (d[2].abs() <= h[2]);
+                    mask |= (inside as u32) << i;
+                }
+                while mask != 0 {
+                    let i = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    f(&leaf[i], lo + i);
                 }
                 continue;
             }
