@@ -1,8 +1,8 @@
 //! kd-tree build speed: `--photons` photons (default 4 M) spread like Fig. 3's disc maps (two
 //! cylinders, density falling off from their tops), built on one thread and on all threads,
 //! then `--queries` k-nearest queries (k = 300), then as many layer-kernel estimates (eq. 11
-//! within 1 mm under the cylinders' tops, HG g = 0.75, the radius of the 300th neighbour). Prints one JSON line; the
-//! build times are the best of `--reps`.
+//! within 1 mm under the cylinders' tops, HG g = 0.75, the radius of the 300th neighbour).
+//! Prints one JSON line; the build times are the best of `--reps`.
 //!
 //!     cargo run --release -p dentalux-core --example kd_bench -- [--photons 4000000]
 //!         [--queries 100000] [--reps 5]

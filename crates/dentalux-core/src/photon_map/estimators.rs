@@ -211,16 +211,17 @@ impl PhotonMap {
         let mut len = 0;
         let photons = self.photons();
         let mut sum = |zs: &[f64], idx: &[u32]| {
-            let mut bits = [0u32; LAYER_BATCH];
-            let mut w = [0.0f64; LAYER_BATCH];
-            let (bits, w) = (&mut bits[..idx.len()], &mut w[..idx.len()]);
-            for (b, &i) in bits.iter_mut().zip(idx) {
-                *b = photons[i as usize].direction_bits();
+            let (mut bits, mut power) = ([0u32; LAYER_BATCH], [0.0f32; LAYER_BATCH]);
+            for (j, &i) in idx.iter().enumerate() {
+                let p = &photons[i as usize];
+                (bits[j], power[j]) = (p.direction_bits(), p.power);
             }
-            direction_cosines(bits, wo, w);
+            let mut w = [0.0f64; LAYER_BATCH];
+            let w = &mut w[..idx.len()];
+            direction_cosines(&bits, wo, w);
             phase.eval_in_place(w);
-            for ((&w, &z), &i) in w.iter().zip(zs).zip(idx) {
-                let w = w * photons[i as usize].power as f64;
+            for ((&w, &z), &power) in w.iter().zip(zs).zip(&power) {
+                let w = w * power as f64;
                 s0 += w;
                 s1 += w * z;
             }

@@ -11,7 +11,7 @@ pub const PHOTON_BYTES: usize = std::mem::size_of::<Photon>();
 /// Subtrees at most this long are scanned linearly instead of descended (32 against 16: an
 /// aimed Fig. 3 pass at 128x96, 0.98x the CPU time; 8: 1.05x).
 pub(super) const LEAF: usize = 32;
-// a leaf's photons fit one u32 bit mask (`for_each_within_box`)
+// a leaf's photons fit one u32 bit mask (`set_bits`)
 const _: () = assert!(LEAF <= 32);
 /// Subtrees at least this long are built in parallel (rayon::join).
 const PAR_BUILD: usize = 16_384;
@@ -61,6 +61,18 @@ fn decode_dir(bits: u32) -> Vec3 {
         (x, y)
     };
     Vec3::new(x, y, z).normalize()
+}
+
+/// The positions of the set bits of `mask`, lowest first (a leaf's photons in order).
+#[inline]
+fn set_bits(mut mask: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            i
+        })
+    })
 }
 
 /// `out[j]` = the direction of `bits[j]` ([`Photon::direction_bits`]) dotted with `w`, the
@@ -348,9 +360,7 @@ impl PhotonMap {
                 d2s[j] = dist2(&p.pos, &q);
                 mask |= ((d2s[j] <= out.bound) as u32) << j;
             }
-            while mask != 0 {
-                let j = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
+            for j in set_bits(mask) {
                 if d2s[j] <= out.bound {
                     out.push(d2s[j], (lo + j) as u32);
                 }
@@ -391,7 +401,13 @@ impl PhotonMap {
         let r2 = (r * r) as f32;
         // f32 rounding of x and of the photons' positions: widen the box by a hair
         let h = half.map(|h| (h * (1.0 + 1e-5) + 1e-4) as f32);
-        let outside = |p: &Photon| (0..3).any(|i| (p.pos[i] - q[i]).abs() > h[i]);
+        // without branches, so a leaf's tests make a bit mask
+        let inside = |p: &Photon| {
+            (dist2(&p.pos, &q) <= r2)
+                & ((p.pos[0] - q[0]).abs() <= h[0])
+                & ((p.pos[1] - q[1]).abs() <= h[1])
+                & ((p.pos[2] - q[2]).abs() <= h[2])
+        };
         // explicit stack of [lo, hi) ranges; depth is log2(n) + 1 < 64
         let mut stack = [(0usize, 0usize); 64];
         let mut sp = 0;
@@ -409,23 +425,16 @@ impl PhotonMap {
                 let leaf = &self.photons[lo..hi];
                 let mut mask = 0u32;
                 for (i, p) in leaf.iter().enumerate() {
-                    let d = [p.pos[0] - q[0], p.pos[1] - q[1], p.pos[2] - q[2]];
-                    let inside = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= r2)
-                        & (d[0].abs() <= h[0])
-                        & (d[1].abs() <= h[1])
-                        & (d[2].abs() <= h[2]);
-                    mask |= (inside as u32) << i;
+                    mask |= (inside(p) as u32) << i;
                 }
-                while mask != 0 {
-                    let i = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
+                for i in set_bits(mask) {
                     f(&leaf[i], lo + i);
                 }
                 continue;
             }
             let mid = (lo + hi) / 2;
             let p = &self.photons[mid];
-            if dist2(&p.pos, &q) <= r2 && !outside(p) {
+            if inside(p) {
                 f(p, mid);
             }
             let axis = p.axis();
