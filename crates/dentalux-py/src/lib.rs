@@ -29,6 +29,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "SLAB_MAX_BACKING_ORDER",
         dentalux_core::integrators::slab::MAX_BACKING_ORDER,
     )?;
+    m.add(
+        "SLAB_WINDOW_KEYS",
+        dentalux_core::instrument::WINDOW_KEYS.to_vec(),
+    )?;
     m.add("DIFFUSE_RUN_KEY", dentalux_core::rng::DIFFUSE_RUN_KEY)?;
     m.add(
         "TRANSMITTED_RUN_KEY",
