@@ -30,6 +30,7 @@ def design_command(
         None, help="photons per band and run (default: dentalux.design.search's)"),
     verify_photons: int = typer.Option(None, help="photons for the verification (default "
                                        "--photons)"),
+    precision: measure_options.Precision = None,
     designs: int = typer.Option(3, help="how many designs to report"),
     nodes: int = typer.Option(None, help="fast-model nodes per layer (default 6/4/3)"),
     seed: int = typer.Option(1, help="random seed"),
@@ -60,7 +61,7 @@ def design_command(
                    instrument=instrument, bands=measure_options.bands(bands), target_tp=target_tp,
                    photons=photons, verify_photons=verify_photons, seed=seed,
                    designs=designs, nodes=nodes, threads=threads,
-                   progress=False if as_json else None)
+                   progress=False if as_json else None, precision=precision)
     if plot is not None:
         from dentalux.design.plot import plane
 

@@ -24,6 +24,9 @@ BackingWhite = Annotated[float, typer.Option(help="white backing reflectance in 
 Contact = Annotated[float, typer.Option(help="optical contact: coupling medium index (>= 1); "
                                              "default the instrument's (an air gap)")]
 Photons = Annotated[int, typer.Option(help="photons per band and run")]
+Precision = Annotated[float, typer.Option(help="target standard error of the reading in ΔE00 "
+                                               "units (over black and white); chooses the "
+                                               "photons instead of --photons")]
 Seed = Annotated[int, typer.Option(help="random seed")]
 Estimator = Annotated[str, typer.Option(help="weighted | analog")]
 Observer = Annotated[str, typer.Option(help="'2' (CIE 1931) or '10' (CIE 1964)")]

@@ -35,6 +35,7 @@ def shade_command(
     substrate: str = typer.Option(None, help="substrate under the --layer stack "
                                   "(see `dentalux design --help`)"),
     photons: mo.Photons = DEFAULTS["photons"],
+    precision: mo.Precision = None,
     seed: mo.Seed = DEFAULTS["seed"],
     estimator: mo.Estimator = DEFAULTS["estimator"],
     observer: mo.Observer = DEFAULTS["observer"],
@@ -66,13 +67,14 @@ def shade_command(
     kw = dict(bands=mo.bands(bands), backing_black=backing_black, backing_white=backing_white,
               contact=contact, photons=photons, seed=seed, estimator=estimator,
               observer=observer, illuminant=illuminant, threads=threads,
-              progress=False if as_json else None)
+              progress=False if as_json else None, precision=precision)
     out = dental.shade(material, thickness, against=against, instrument=inst, match=match,
                        specimen=specimen, **kw)
     if as_json:
         print(dumps_strict(out))
         return
     m = out
+    se = m["stderr"]
     ins = m["instrument"]
     where = (f"{ins['name']}: {ins['geometry']}, lit {ins['illuminated_diameter_mm']} mm, "
              f"viewed {ins['viewed_diameter_mm']} mm, specular {ins['specular']}")
@@ -80,22 +82,31 @@ def shade_command(
              else f"{material}, {thickness:g} mm")
     table = Table(title=f"{title}, {illuminant}, {observer} deg, read by {where}")
     table.add_column("quantity")
-    table.add_column("value", justify="right")
+    table.add_column("value ± standard error", justify="right")
     for key, label in (("lab_black", "L*a*b* over black"), ("lab_white", "L*a*b* over white"),
                        ("lab_transmitted", "L*a*b* transmitted")):
-        table.add_row(label, " ".join(f"{x:7.2f}" for x in m[key]))
+        table.add_row(label, "  ".join(f"{x:.2f} ± {e:.2f}" for x, e in zip(m[key], se[key],
+                                                                              strict=True)))
     for key, label in (("tp", "TP (ΔE*ab)"), ("tp00", "TP00 (ΔE00)"), ("cr", "CR = Yb/Yw"),
                        ("op", "OP")):
-        table.add_row(label, f"{m[key]:.4f}")
+        digits = 4 if key == "cr" else 2
+        table.add_row(label, f"{m[key]:.{digits}f} ± {se[key]:.{digits}f}")
     table.add_row("edge loss over black / white",
                   f"{m['edge_loss']['black']:.4f} / {m['edge_loss']['white']:.4f}")
     if against:
         table.add_row(f"ΔE00 vs {against} (over white)",
                       f"{m['delta_e00']:.3f} ± {m['delta_e00_stderr']:.3f}")
-        table.add_row("  verdict", f"{m['verdict']} (PT {dental.PT}, AT {dental.AT})")
+        table.add_row("  verdict", f"{m['verdict']} (PT {dental.PT}, AT {dental.AT}; "
+                      f"classes within ±{dental.VERDICT_SIGMAS:g} s.e.)")
         table.add_row("ΔTP00", f"{m['delta_tp00']:.3f}")
     for row in m.get("shade_match", [])[:3]:
         table.add_row(f"{match} {row['tab']}", f"ΔE00 {row['delta_e00']:.2f}")
+    photons_line = f"{m['photons']} photons, {m['cpu_seconds']:.1f} CPU-s"
+    if "precision" in m:
+        p = m["precision"]
+        photons_line += (f"; precision asked {p['requested']:g}, reached {p['achieved']:.3f} "
+                         f"ΔE00 ({p['photons_per_band']} photons per band)")
+    table.caption = photons_line
     Console().print(table)
 
 

@@ -26,8 +26,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
-from dentalux.color import delta_e00
 from dentalux import reading
+from dentalux.color import delta_e00
 from dentalux.slab import Layer
 
 DEFAULT_NODES = {1: 6, 2: 4, 3: 3}

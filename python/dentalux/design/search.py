@@ -51,6 +51,7 @@ class DesignResult:
     substrate: str
     layers: list[dict]
     photons: int
+    photons_per_band: int = 0
     plane: dict | None = None
     surface: Surface | None = field(default=None, repr=False)
     # what a render of a design needs (dentalux.design.render): the resolved layer
@@ -58,10 +59,17 @@ class DesignResult:
     parts: list = field(default_factory=list, repr=False)
     cement: tuple | None = field(default=None, repr=False)
     bands: list = field(default_factory=list, repr=False)
+    # with a requested precision: the pilot's numbers and the photons they chose
+    precision: dict | None = None
 
     def to_json(self) -> dict:
-        return {"target": self.target.to_json(), "designs": self.designs,
-                "instrument": self.instrument, "seconds": self.seconds}
+        out = {"target": self.target.to_json(), "designs": self.designs,
+               "instrument": self.instrument, "seconds": self.seconds,
+               "cpu_seconds": self.search_cpu_seconds + self.verify_cpu_seconds,
+               "photons_per_band": self.photons_per_band}
+        if self.precision is not None:
+            out["precision"] = self.precision
+        return out
 
 
 def _axes(ranges, step: float) -> list[np.ndarray]:
@@ -139,7 +147,8 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
              nodes: int | None = None, step: float | None = None,
              spacing: float = TOLERANCE_MM, check: bool = True, illuminant: str = "D65",
              observer: str = "2", reconstruction: str = "hold", estimator: str = "weighted",
-             threads: int | None = None, progress: bool | None = False) -> DesignResult:
+             threads: int | None = None, progress: bool | None = False,
+             precision: float | None = None) -> DesignResult:
     """Search layer thicknesses that match ``target`` read through ``instrument``.
 
     ``target``: ``lab:L,a,b``, ``GUIDE:TAB`` (data/shade_guides.csv), ``stack:MAT:MM/...``,
@@ -151,7 +160,12 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
     verification; ``designs``: how many to return; ``nodes`` per layer (default 6, 4, 3 for
     1, 2, 3 layers); ``step`` of the dense search grid [mm]; ``check=False`` skips the
     verification (the numbers are then the fast model's and ``verified`` is false).
+    ``precision`` (a standard error in ΔE00 units) chooses ``photons`` and
+    ``verify_photons`` instead: a pilot reading of the specimen at the middle of every
+    thickness range sizes them (:func:`dentalux.dental.photons_for_precision`).
     """
+    if precision is not None:
+        dental.check_precision(precision)
     start = time.perf_counter()
     cpu0 = time.process_time()
     spec = constraints.check_layers(layers)
@@ -216,6 +230,13 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
     def read_stack(stack):
         return dental.read(stack, instrument=inst_plain, photons=verify_photons,
                            seed=seed + 2, **common)
+
+    plan = None
+    if precision is not None:
+        middle = [(m, 0.5 * (lo + hi)) for m, (lo, hi) in zip(parts, ranges, strict=True)]
+        photons, plan = dental.photons_for_precision(
+            middle + tail, precision, seed=seed, instrument=inst, **common)
+        verify_photons = photons
 
     tgt = targets.parse(target, target_tp, read=read_stack)
     tp = tgt.tp00 is not None
@@ -349,5 +370,5 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
         search_cpu_seconds=search_cpu, verify_cpu_seconds=time.process_time() - cpu0 - search_cpu,
         substrate=substrate,
         layers=[{"material": n, "range_mm": list(r)} for n, r in zip(names, ranges, strict=True)],
-        photons=surface.photons, plane=plane, surface=surface, parts=parts, cement=cement,
-        bands=[float(b) for b in wl])
+        photons=surface.photons, photons_per_band=int(photons), plane=plane, surface=surface,
+        parts=parts, cement=cement, bands=[float(b) for b in wl], precision=plan)
