@@ -285,11 +285,13 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     )
 
 
-# photons per band of the pilot reading that sizes a run for a requested precision
-PILOT_PHOTONS = 2_000
+# photons per band of the pilot reading that sizes a run for a requested precision: 32
+# batches of the core's smallest size (slab.rs MIN_BATCH, 256), so its standard error rests
+# on 32 replicates (itself uncertain by about 13 %)
+PILOT_PHOTONS = 8_192
 # the pilot's seed is the reading's plus this, so the reading does not reuse its photons
 PILOT_SEED_OFFSET = 7_919
-# margin on the pilot's estimate (its own standard error is about 10 % with 64 replicates)
+# margin on the pilot's estimate of the photons needed (see PILOT_PHOTONS)
 PRECISION_MARGIN = 1.2
 
 
