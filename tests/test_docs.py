@@ -18,7 +18,6 @@ from pathlib import Path
 
 import pytest
 from cli_run import DENTALUX
-
 from dentalux.cli import reference
 
 ROOT = Path(__file__).resolve().parents[1]
