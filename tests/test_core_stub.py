@@ -11,7 +11,6 @@ import inspect
 from pathlib import Path
 
 import pytest
-
 from dentalux import _core
 
 STUB = Path(__file__).resolve().parents[1] / "python" / "dentalux" / "_core.pyi"
