@@ -51,7 +51,7 @@ def test_fitted_tissues_keep_the_rest_of_their_source():
 
 
 def test_transcribed_values_match_the_reference_table():
-    # tooth-optics.md §1.1/§1.2 rows, read independently of the TOML file
+    # docs/explanation/tooth-optics.md §1.1/§1.2 rows, read independently of the TOML file
     rows = {
         ("enamel@zoller2018-kienle", 400): (0.06, 0.8, 0.9, 1.633),
         ("enamel@zoller2018-kienle", 700): (0.02, 0.2, 0.9, 1.633),
