@@ -93,7 +93,7 @@ def test_tutorial_runs(page, tmp_path, monkeypatch):
     assert blocks, f"{page.name}: no runnable blocks"
     monkeypatch.chdir(tmp_path)
     (tmp_path / "scenes").symlink_to(ROOT / "scenes")  # as from the repository's root
-    namespace: dict = {"__name__": "__tutorial__"}
+    namespace: dict = {"__name__": "__main__"}  # each page runs as a script would
     for lang, code in blocks:
         code = _cut_photons(code)
         if lang == "python":
