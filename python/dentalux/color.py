@@ -154,6 +154,17 @@ def delta_e00(lab1, lab2) -> np.ndarray:
     return colour.difference.delta_E_CIE2000(np.asarray(lab1, float), np.asarray(lab2, float))
 
 
+def delta_e00_scale(lab, lab_stderr, step: float = 0.01) -> float:
+    """A colour's uncertainty in ΔE00 units: sqrt(Σ_j (s_j ∂ΔE00/∂x_j)²) over x = L*, a*,
+    b*, the slope of ΔE00 from ``lab`` along each axis taken over ``step`` (ΔE00 has no
+    derivative at zero distance; its slope there is what a small error moves it by). It is
+    the ΔE00 that one standard error in every coordinate amounts to at this colour."""
+    lab = np.asarray(lab, float)
+    err = np.asarray(lab_stderr, float)
+    slopes = np.array([float(delta_e00(lab + step * e, lab)) / step for e in np.eye(3)])
+    return float(np.sqrt(np.sum((slopes * err) ** 2)))
+
+
 def delta_e76(lab1, lab2) -> np.ndarray:
     """CIELAB Euclidean colour difference ΔE*ab."""
     d = np.asarray(lab1, float) - np.asarray(lab2, float)

@@ -24,39 +24,40 @@ reflectance as seen from inside that medium.
 
 With an instrument (:mod:`dentalux.instrument`) other than ``infinite``, the backing is
 inside the slab walk instead: photons enter over the instrument's lit spot and are read only
-where they leave inside its window, so light that travels sideways is lost (edge loss), and
-each backing is one run (plus one for the transmitted colour where the black backing is not
-ideal or the disc is in optical contact). The ``infinite`` instrument is the adding formula
-above, unchanged.
+where they leave inside its window, so light that travels sideways is lost (edge loss). One
+walk per band serves every backing (tallied by backing order, :mod:`dentalux.reading`), so
+the readings over black and white and the transmitted light share their photons. The
+``infinite`` instrument is the adding formula above.
 
 Metrics: CIELAB over black, over white and in transmission (the disc's total transmittance
 for the normal beam, disc in air, against a perfect transmitter); TP = ΔE*ab(black, white);
 TP00 = ΔE00(black, white); CR = Y_black / Y_white; OP = sqrt(Δa*² + Δb*²) between the
 transmitted colour and the colour reflected over black. Monte Carlo standard errors are
-propagated to every metric by the delta method (first-order, numerical derivatives with
-respect to each band's R1, T1, R2, T2, T; the small within-run covariance of R and T is
-neglected).
+propagated to every metric to first order (numerical derivatives): through the replicates
+of the shared walk, which carry the correlation of black, white and transmitted, or, for
+the ``infinite`` geometry's independent runs, by adding their variances.
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from dentalux import instrument as instruments
-from dentalux import limits
-from dentalux.color import delta_e00, delta_e76, system
-from dentalux.progress import bar
-from dentalux.slab import Layer, simulate
+from dentalux import limits, reading
+from dentalux.color import delta_e00, delta_e00_scale, delta_e76, system
 from dentalux.spectra import Reconstruction, resolve_bands
 
 PT, AT = 0.8, 1.8  # ΔE00 50:50 % perceptibility / acceptability (Paravina et al. 2015)
 TPT, TAT = 0.62, 2.62  # ΔTP00 50:50 % perceptibility / acceptability thresholds
+# the keys of `dentalux shade --json` (DentalMetrics.to_json): the values, their standard
+# errors under the same keys in `stderr`, the cost, and the spectra as the instrument reads them
 JSON_KEYS = ("lab_black", "lab_white", "lab_transmitted", "tp", "tp00", "cr", "op",
-             "instrument", "edge_loss")
+             "instrument", "edge_loss", "stderr", "cpu_seconds", "photons", "wavelength_nm",
+             "reflectance_black", "reflectance_white", "reflectance_black_stderr",
+             "reflectance_white_stderr")
 DEFAULT_PHOTONS = 20_000
 # the bands a reading integrates by default: 380-780 nm every 10 nm (spectra.full_bands)
 DEFAULT_BANDS = "full"
@@ -80,14 +81,36 @@ class DentalMetrics:
     spectra: dict[str, list[float]] = field(default_factory=dict)
     photons: int = 0
     seconds: float = 0.0
+    cpu_seconds: float = 0.0
+    method: str = ""
+    precision: dict = field(default_factory=dict)
     instrument: dict = field(default_factory=dict)
     edge_loss: dict = field(default_factory=dict)
     layers: list = field(default_factory=list)
 
+    def stderr_json(self) -> dict:
+        """The standard errors under the same keys as the values they qualify."""
+        out = {}
+        for key in ("lab_black", "lab_white", "lab_transmitted"):
+            out[key] = [self.stderr[f"{key}.{c}"] for c in "Lab"]
+        out.update({k: self.stderr[k] for k in ("tp", "tp00", "cr", "op")})
+        return out
+
     def to_json(self) -> dict:
-        """The ``dentalux shade --json`` keys."""
+        """The ``dentalux shade --json`` keys: the values, ``stderr`` (the same keys),
+        ``cpu_seconds``, and the spectra as the instrument reads them."""
         d = asdict(self)
-        return {k: d[k] for k in JSON_KEYS}
+        out = {k: d[k] for k in JSON_KEYS if k in d and k != "stderr"}
+        out["stderr"] = self.stderr_json()
+        out["cpu_seconds"] = self.cpu_seconds
+        out["photons"] = self.photons
+        if self.precision:
+            out["precision"] = self.precision
+        out["wavelength_nm"] = self.wavelengths_nm
+        for backing in ("black", "white"):
+            out[f"reflectance_{backing}"] = self.spectra.get(f"over_{backing}", [])
+            out[f"reflectance_{backing}_stderr"] = self.spectra.get(f"over_{backing}_stderr", [])
+        return out
 
 
 def _resolve_material(material):
@@ -135,20 +158,10 @@ def backing_spectrum(backing, bands: np.ndarray, name: str) -> np.ndarray:
     return r
 
 
-def over_backing(r1, t1, r2, t2, rb):
-    """Reflectance of a disc on a Lambertian backing rb (adding formula, see module doc)."""
-    return r1 + t1 * rb * t2 / (1.0 - rb * r2)
-
-
-def _colour(r1, t1, r2, t2, tt, rb_black, rb_white, cs, rec, op_backing):
-    """Vectorised metrics of the adding formula: inputs (..., bands) -> dict of arrays (...)."""
-    r_b = over_backing(r1, t1, r2, t2, rb_black)
-    r_w = over_backing(r1, t1, r2, t2, rb_white)
-    return _colour_of(r_b, r_w, tt, cs, rec, op_backing)
-
-
-def _colour_of(r_b, r_w, tt, cs, rec, op_backing):
-    """Vectorised metrics from the readings over black, over white and in transmission."""
+def colour_of(spectra, cs, rec, op_backing):
+    """Vectorised metrics of a batch of read spectra (..., channels, bands): CIELAB over
+    black, over white and in transmission, TP, TP00, CR and OP."""
+    r_b, r_w, tt = (spectra[..., i, :] for i in range(3))
     xyz_b, xyz_w, xyz_t = (cs.grid_to_XYZ(rec(s)) for s in (r_b, r_w, tt))
     lab_b, lab_w, lab_t = (cs.XYZ_to_Lab(x) for x in (xyz_b, xyz_w, xyz_t))
     lab_r = lab_b if op_backing == "black" else lab_w
@@ -163,27 +176,6 @@ def _colour_of(r_b, r_w, tt, cs, rec, op_backing):
     }
 
 
-def _propagate(colour, vals: np.ndarray, errs: np.ndarray) -> tuple[dict, dict]:
-    """Metrics of ``vals`` (inputs × bands) and their standard errors by the delta method:
-    ``colour`` evaluated on a batch holding ``vals`` and each input of each band moved by h."""
-    h = 1e-6
-    n_in = vals.size
-    batch = np.broadcast_to(vals, (1 + n_in,) + vals.shape).copy()
-    idx = np.arange(n_in)
-    batch.reshape(1 + n_in, -1)[1 + idx, idx] += h
-    out = colour(batch)
-    sig = errs.ravel()
-    stderr = {}
-    for key in ("tp", "tp00", "cr", "op"):
-        d = (out[key][1:] - out[key][0]) / h
-        stderr[key] = float(np.sqrt(np.sum((d * sig) ** 2)))
-    for key in ("lab_black", "lab_white", "lab_transmitted"):
-        d = (out[key][1:] - out[key][0]) / h
-        for j, c in enumerate("Lab"):
-            stderr[f"{key}.{c}"] = float(np.sqrt(np.sum((d[:, j] * sig) ** 2)))
-    return {key: value[0] for key, value in out.items()}, stderr
-
-
 def _check_thickness(name: str, thickness) -> float:
     try:
         ok = not isinstance(thickness, bool) and float(thickness) > 0 and np.isfinite(thickness)
@@ -194,86 +186,29 @@ def _check_thickness(name: str, thickness) -> float:
     return float(thickness)
 
 
-def _stack(specimen, lam: float) -> list[Layer]:
-    return [Layer(mua=float(o.mua), mus=float(o.mus), g=float(o.g), n=float(o.n),
-                  thickness=t, fd=float(o.fd))
-            for o, t in ((m.at(float(lam)), t) for m, t in specimen)]
-
-
-def _infinite_runs(specimen, wl, contact, photons, seed, estimator, threads, progress):
-    """R1, T1 (beam from above), R2, T2 (diffuse from below, the stack flipped) and the
-    transmittance in air per band, with standard errors: the adding formula's inputs."""
-    n_below = 1.0 if contact is None else float(contact)
-    runs = 2 if contact is None else 3
-    vals = np.zeros((5, len(wl)))
-    errs = np.zeros((5, len(wl)))
-    with bar(len(wl) * runs, "bands", progress) as cb:
-        for k, lam in enumerate(wl):
-            stack = _stack(specimen, lam)
-            common = dict(n_photons=int(photons), estimator=estimator, threads=threads)
-            a = simulate(stack, seed=seed, band=k, n_above=1.0, n_below=n_below, **common)
-            b = simulate(stack[::-1], seed=seed, band=100_000 + k, n_above=n_below,
-                         n_below=1.0, incidence="diffuse", **common)
-            c = a
-            if contact is not None:
-                c = simulate(stack, seed=seed, band=200_000 + k, **common)
-            for i, (res, key) in enumerate(((a, "total_reflectance"), (a, "total_transmittance"),
-                                            (b, "total_reflectance"), (b, "total_transmittance"),
-                                            (c, "total_transmittance"))):
-                vals[i, k] = getattr(res, key)
-                errs[i, k] = res.stderr[key]
-            if cb:
-                cb((k + 1) * runs)
-    return vals, errs, runs
-
-
-def _windowed_runs(specimen, wl, inst, rb_black, rb_white, contact, photons, seed, estimator,
-                   threads, progress):
-    """The instrument's readings over black, over white and in transmission per band, with
-    standard errors, and the edge loss (outside the window + rim) of each backing run."""
-    n_below = 1.0 if contact is None else float(contact)
-    incidence = inst.spec.incidence
-    extra_t = contact is not None or bool(np.any(rb_black > 0))
-    runs = 3 if extra_t else 2
-    vals = np.zeros((3, len(wl)))
-    errs = np.zeros((3, len(wl)))
-    loss = np.zeros((2, len(wl)))
-    f = inst.white_fraction()
-    with bar(len(wl) * runs, "bands", progress) as cb:
-        for k, lam in enumerate(wl):
-            stack = _stack(specimen, lam)
-            common = dict(n_photons=int(photons), estimator=estimator, threads=threads,
-                          seed=seed, incidence=incidence, n_above=1.0)
-            for i, (rb, band) in enumerate(((rb_black[k], k), (rb_white[k], 100_000 + k))):
-                res = simulate(stack, band=band, n_below=n_below, window=inst.window(rb),
-                               **common)
-                vals[i, k], errs[i, k] = inst.reading(res.window, res.window_stderr)
-                loss[i, k] = res.window["outside_reflectance"] + res.window["rim_loss"]
-                if i == 0:
-                    t_run = res
-            if extra_t:
-                t_run = simulate(stack, band=200_000 + k, n_below=1.0,
-                                 window=inst.window(0.0), **common)
-            vals[2, k] = t_run.window["viewed_transmittance"] / f
-            errs[2, k] = t_run.window_stderr["viewed_transmittance"] / f
-            if cb:
-                cb((k + 1) * runs)
-    return vals, errs, loss, runs
-
-
 def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, backing_white=None,
          contact: float | None = None, photons: int = DEFAULT_PHOTONS, seed: int = 1,
          estimator: str = "weighted", illuminant: str = "D65", observer: str = "2",
          op_backing: str = "black", reconstruction: str = "hold", threads: int | None = None,
-         progress: bool | None = False) -> DentalMetrics:
+         progress: bool | None = False, precision: float | None = None) -> DentalMetrics:
     """Colour metrics of a layered specimen as ``instrument`` reads it (see module doc).
 
     ``specimen``: a list of (material, thickness [mm]) from top to bottom; a material is a
     Material, a library name, a TOML file or ``FILE.toml:NAME``. ``instrument``: an
     :class:`dentalux.instrument.Instrument`, a preset name or a TOML file (None: the
     ``infinite`` geometry). ``backing_black``, ``backing_white``, ``contact`` override the
-    instrument's (None keeps them). ``photons`` per band and run.
+    instrument's (None keeps them). ``photons`` per band and run; ``precision`` (a target
+    standard error in ΔE00 units, :func:`photons_for_precision`) chooses them instead.
     """
+    if precision is not None:
+        kw = dict(bands=bands, instrument=instrument, backing_black=backing_black,
+                  backing_white=backing_white, contact=contact, seed=seed,
+                  estimator=estimator, illuminant=illuminant, observer=observer,
+                  op_backing=op_backing, reconstruction=reconstruction, threads=threads)
+        photons, plan = photons_for_precision(specimen, precision, **kw)
+        m = read(specimen, photons=photons, progress=progress, **kw)
+        m.precision = {**plan, "achieved": reading_precision(m)}
+        return m
     if isinstance(specimen, (str, bytes)) or not hasattr(specimen, "__iter__"):
         raise ValueError(f"specimen = {specimen!r}: expected a list of (material, thickness)")
     parts = []
@@ -304,35 +239,28 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     contact = inst.contact_index
     cs = system(illuminant, str(observer))
     rec = Reconstruction(wl, grid=cs.wavelengths, basis=reconstruction)
-    start = time.perf_counter()
+    spectra = reading.measure(reading.stacks(parts, wl), wl, inst, rb_black, rb_white,
+                              photons, seed, estimator, threads, progress)
+    out, errs = spectra.propagate(lambda b: colour_of(b, cs, rec, op_backing))
+    stderr = {k: float(errs[k]) for k in ("tp", "tp00", "cr", "op")}
+    for key in ("lab_black", "lab_white", "lab_transmitted"):
+        for j, c in enumerate("Lab"):
+            stderr[f"{key}.{c}"] = float(errs[key][j])
+    names = reading.CHANNELS
+    spectra_out = {
+        **{k: spectra.values[i] for i, k in enumerate(names)},
+        **{f"{k}_stderr": spectra.stderr[i] for i, k in enumerate(names)},
+    }
     if inst.is_infinite:
-        vals, errs, runs = _infinite_runs(parts, wl, contact, photons, seed, estimator,
-                                          threads, progress)
-        out, stderr = _propagate(
-            lambda b: _colour(*(b[:, i] for i in range(5)), rb_black, rb_white, cs, rec,
-                              op_backing), vals, errs)
-        names = ("r1", "t1", "r2", "t2", "transmitted")
-        spectra = {
-            **{k: vals[i] for i, k in enumerate(names)},
-            **{f"{k}_stderr": errs[i] for i, k in enumerate(names)},
-            "over_black": over_backing(*vals[:4], rb_black),
-            "over_white": over_backing(*vals[:4], rb_white),
-        }
+        spectra_out.update({k: spectra.extra[k] for k in reading.engine.ADDING_INPUTS})
+        spectra_out.update({f"{k}_stderr": spectra.extra[f"{k}_stderr"]
+                            for k in reading.engine.ADDING_INPUTS})
         edge_loss = {"black": 0.0, "white": 0.0}
     else:
-        vals, errs, loss, runs = _windowed_runs(parts, wl, inst, rb_black, rb_white, contact,
-                                                photons, seed, estimator, threads, progress)
-        out, stderr = _propagate(
-            lambda b: _colour_of(b[:, 0], b[:, 1], b[:, 2], cs, rec, op_backing), vals, errs)
-        names = ("over_black", "over_white", "transmitted")
-        spectra = {
-            **{k: vals[i] for i, k in enumerate(names)},
-            **{f"{k}_stderr": errs[i] for i, k in enumerate(names)},
-            "edge_loss_black": loss[0],
-            "edge_loss_white": loss[1],
-        }
-        edge_loss = {"black": float(loss[0].mean()), "white": float(loss[1].mean())}
-    seconds = time.perf_counter() - start
+        spectra_out.update(edge_loss_black=spectra.edge_loss[0],
+                           edge_loss_white=spectra.edge_loss[1])
+        edge_loss = {"black": float(spectra.edge_loss[0].mean()),
+                     "white": float(spectra.edge_loss[1].mean())}
     return DentalMetrics(
         material=" / ".join(str(getattr(m, "name", "material")) for m, _ in parts),
         thickness=float(sum(t for _, t in parts)),
@@ -345,9 +273,11 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
         op=float(out["op"]),
         stderr=stderr,
         wavelengths_nm=wl.tolist(),
-        spectra={k: np.asarray(v).tolist() for k, v in spectra.items()},
-        photons=int(photons) * runs * len(wl),
-        seconds=seconds,
+        spectra={k: np.asarray(v).tolist() for k, v in spectra_out.items()},
+        photons=spectra.photons,
+        seconds=spectra.extra["seconds"],
+        cpu_seconds=spectra.cpu_seconds,
+        method=spectra.method,
         instrument=inst.to_json(),
         edge_loss=edge_loss,
         layers=[{"material": str(getattr(m, "name", "material")), "thickness_mm": t}
@@ -355,11 +285,64 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     )
 
 
+# photons per band of the pilot reading that sizes a run for a requested precision
+PILOT_PHOTONS = 2_000
+# the pilot's seed is the reading's plus this, so the reading does not reuse its photons
+PILOT_SEED_OFFSET = 7_919
+# margin on the pilot's estimate (its own standard error is about 10 % with 64 replicates)
+PRECISION_MARGIN = 1.2
+
+
+def reading_precision(m: DentalMetrics) -> float:
+    """The reading's standard error in ΔE00 units: the larger of the colours over black and
+    over white (:func:`dentalux.color.delta_e00_scale`)."""
+    return max(delta_e00_scale(getattr(m, f"lab_{b}"), [m.stderr[f"lab_{b}.{c}"] for c in "Lab"])
+               for b in ("black", "white"))
+
+
+def check_precision(precision, name: str = "precision") -> float:
+    """A target standard error in ΔE00 units: a finite number > 0."""
+    try:
+        ok = not isinstance(precision, bool) and float(precision) > 0 \
+            and np.isfinite(float(precision))
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise ValueError(f"{name} = {precision!r} is out of range: allowed a finite number > 0 "
+                         "(a standard error in ΔE00 units, e.g. 0.05)")
+    return float(precision)
+
+
+def photons_for_precision(specimen, precision, seed: int = 1, name: str = "precision",
+                          **kw) -> tuple[int, dict]:
+    """Photons per band that bring the reading's standard error (ΔE00 units, over black and
+    over white) to ``precision``: a pilot reading of :data:`PILOT_PHOTONS` measures it, and
+    the variance falls as 1/photons. A count over the slab ceiling or a run over
+    :data:`dentalux.limits.MAX_READING_CPU_SECONDS` is refused before it starts, with the
+    estimate. Returns the count and the plan (pilot numbers and estimates)."""
+    target = check_precision(precision, name)
+    pilot = read(specimen, photons=PILOT_PHOTONS, seed=int(seed) + PILOT_SEED_OFFSET, **kw)
+    p0 = reading_precision(pilot)
+    need = int(np.ceil(PILOT_PHOTONS * PRECISION_MARGIN * (p0 / target) ** 2))
+    need = max(need, PILOT_PHOTONS)
+    cpu = pilot.cpu_seconds * need / PILOT_PHOTONS
+    plan = {"requested": target, "pilot_photons": PILOT_PHOTONS, "pilot_precision": p0,
+            "photons_per_band": need, "estimated_cpu_seconds": cpu}
+    if need > limits.MAX_SLAB_PHOTONS or cpu > limits.MAX_READING_CPU_SECONDS:
+        raise ValueError(
+            f"{name} = {target:g} ΔE00 would need about {need:.3g} photons per band "
+            f"(about {cpu:.3g} CPU-s; the pilot of {PILOT_PHOTONS} read {p0:.3g}); allowed at "
+            f"most {limits.MAX_SLAB_PHOTONS:.3g} photons and "
+            f"{limits.MAX_READING_CPU_SECONDS:g} CPU-s: ask for a coarser precision")
+    return need, plan
+
+
 def metrics(material, thickness: float, bands=DEFAULT_BANDS, backing_black=None, backing_white=None,
             contact: float | None = None, photons: int = DEFAULT_PHOTONS, seed: int = 1,
             estimator: str = "weighted", illuminant: str = "D65", observer: str = "2",
             op_backing: str = "black", reconstruction: str = "hold", threads: int | None = None,
-            progress: bool | None = False, instrument=None) -> DentalMetrics:
+            progress: bool | None = False, instrument=None,
+            precision: float | None = None) -> DentalMetrics:
     """Colour metrics of a ``thickness`` [mm] disc of ``material`` (see module doc).
 
     ``material``: a Material (anything with ``.at(l)`` giving mua, mus, g, fd, n), a library
@@ -374,7 +357,7 @@ def metrics(material, thickness: float, bands=DEFAULT_BANDS, backing_black=None,
                 backing_black=backing_black, backing_white=backing_white, contact=contact,
                 photons=photons, seed=seed, estimator=estimator, illuminant=illuminant,
                 observer=observer, op_backing=op_backing, reconstruction=reconstruction,
-                threads=threads, progress=progress)
+                threads=threads, progress=progress, precision=precision)
 
 
 MATCH_BACKING = "white"  # shade tabs are matched to the reading over the white backing
@@ -401,7 +384,8 @@ def shade(material, thickness: float = 1.0, against=None, instrument=None, match
     if against:
         ref = read([(against, m.thickness)], instrument=inst, **kw)
         cmp = compare(m, ref)
-        out.update({k: cmp[k] for k in ("delta_e00", "delta_tp00", "verdict")})
+        out.update({k: cmp[k] for k in ("delta_e00", "delta_tp00", "verdict",
+                                        "verdict_probability")})
         out["delta_e00_stderr"] = cmp["delta_e00_stderr"]
     if match:
         from dentalux import shade_guides
@@ -413,12 +397,36 @@ def shade(material, thickness: float = 1.0, against=None, instrument=None, match
     return out
 
 
-def verdict(delta_e: float) -> str:
-    """ΔE00 against the 50:50 % thresholds: imperceptible (< 0.8), acceptable (<= 1.8),
-    unacceptable."""
+VERDICTS = ("imperceptible", "acceptable", "unacceptable")
+# a verdict names every class within this many standard errors of the estimate (95 %)
+VERDICT_SIGMAS = 2.0
+
+
+def _classify(delta_e: float) -> str:
     if delta_e < PT:
-        return "imperceptible"
-    return "acceptable" if delta_e <= AT else "unacceptable"
+        return VERDICTS[0]
+    return VERDICTS[1] if delta_e <= AT else VERDICTS[2]
+
+
+def verdict(delta_e: float, stderr: float = 0.0) -> str:
+    """ΔE00 against the 50:50 % thresholds: imperceptible (< 0.8), acceptable (<= 1.8),
+    unacceptable. With a standard error, every class that ΔE00 ± 2 s.e. reaches, joined by
+    " or " (e.g. "imperceptible or acceptable"): a verdict never claims more than the
+    estimate's precision allows."""
+    lo, hi = delta_e - VERDICT_SIGMAS * stderr, delta_e + VERDICT_SIGMAS * stderr
+    first, last = VERDICTS.index(_classify(max(lo, 0.0))), VERDICTS.index(_classify(hi))
+    return " or ".join(VERDICTS[first:last + 1])
+
+
+def verdict_probabilities(delta_e: float, stderr: float) -> dict:
+    """Probability of each class for a normally distributed estimate ΔE00 ± s.e."""
+    from scipy.stats import norm
+
+    if stderr <= 0:
+        return {v: float(v == _classify(delta_e)) for v in VERDICTS}
+    below_pt = float(norm.cdf((PT - delta_e) / stderr))
+    below_at = float(norm.cdf((AT - delta_e) / stderr))
+    return {VERDICTS[0]: below_pt, VERDICTS[1]: below_at - below_pt, VERDICTS[2]: 1 - below_at}
 
 
 def translucency_verdict(delta_tp00: float) -> str:
@@ -445,7 +453,9 @@ def compare(sample: DentalMetrics, reference: DentalMetrics, backing: str = "whi
             pair = (lab + step, other) if sign == 0 else (other, lab + step)
             d = (float(delta_e00(*pair)) - de) / 1e-4
             var += (d * res.stderr.get(f"{key}.{c}", 0.0)) ** 2
-    return {"delta_e00": de, "delta_tp00": dtp, "verdict": verdict(de),
+    se = float(np.sqrt(var))
+    return {"delta_e00": de, "delta_tp00": dtp, "verdict": verdict(de, se),
+            "verdict_probability": verdict_probabilities(de, se),
             "translucency_verdict": translucency_verdict(dtp),
-            "delta_e00_stderr": float(np.sqrt(var)),
+            "delta_e00_stderr": se,
             "delta_tp00_stderr": float(np.hypot(sample.stderr["tp00"], reference.stderr["tp00"]))}

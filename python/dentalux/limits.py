@@ -30,6 +30,9 @@ MAX_SLAB_PHOTONS = 100_000_000_000
 #: photons per Monte Carlo evaluation of ``dentalux fit --model mc`` (a fit runs
 #: tens to hundreds of evaluations)
 MAX_FIT_PHOTONS = 100_000_000
+#: CPU-seconds a reading sized by a requested precision (``--precision``) may take: a
+#: request beyond it is refused up front with the estimate
+MAX_READING_CPU_SECONDS = 3_600.0
 #: photons per band of a render: ``photons``, ``volume_photons`` and ``volume_stored``
 MAX_RENDER_PHOTONS = 10_000_000_000
 #: samples per pixel of a render

@@ -45,6 +45,7 @@ fn main() {
         radial: None,
         angular_bins: None,
         window: None,
+        backing_orders: None,
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)

@@ -46,6 +46,13 @@ pub fn pass_tag(pass: u32) -> u64 {
     (pass as u64) << 32
 }
 
+/// Stream key offset of a specimen reading's flipped run (diffuse light from below, the
+/// adding formula's R2 and T2): band k's run is keyed `DIFFUSE_RUN_KEY + k`.
+pub const DIFFUSE_RUN_KEY: u64 = 100_000;
+/// Stream key offset of a specimen reading's separate transmitted run (the disc in air when
+/// the reading itself has an optical contact): `TRANSMITTED_RUN_KEY + k`.
+pub const TRANSMITTED_RUN_KEY: u64 = 200_000;
+
 /// A random stream (xoshiro256++), keyed by (seed, band, batch).
 #[derive(Debug, Clone)]
 pub struct Stream(Xoshiro256PlusPlus);

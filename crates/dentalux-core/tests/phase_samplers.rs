@@ -36,6 +36,7 @@ fn run(phase: PhaseFunction, seed: u64) -> SlabResult {
         radial: None,
         angular_bins: Some(BINS),
         window: None,
+        backing_orders: None,
     };
     simulate(&cfg, &Control::new()).unwrap()
 }

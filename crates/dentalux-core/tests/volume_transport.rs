@@ -219,6 +219,7 @@ fn slab_under_sky(half: f64) -> (Scene, Vec3, f64, f64) {
         radial: None,
         angular_bins: None,
         window: None,
+        backing_orders: None,
     };
     let res = slab::simulate(&cfg, &Control::new()).unwrap();
     let rt = res.get("total_reflectance").unwrap();

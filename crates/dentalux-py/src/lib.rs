@@ -25,7 +25,21 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         dentalux_core::integrators::slab::SCALAR_KEYS.to_vec(),
     )?;
     m.add("PHOTON_BYTES", dentalux_core::photon_map::PHOTON_BYTES)?;
+    m.add(
+        "SLAB_MAX_BACKING_ORDER",
+        dentalux_core::integrators::slab::MAX_BACKING_ORDER,
+    )?;
+    m.add(
+        "SLAB_WINDOW_KEYS",
+        dentalux_core::instrument::WINDOW_KEYS.to_vec(),
+    )?;
+    m.add("DIFFUSE_RUN_KEY", dentalux_core::rng::DIFFUSE_RUN_KEY)?;
+    m.add(
+        "TRANSMITTED_RUN_KEY",
+        dentalux_core::rng::TRANSMITTED_RUN_KEY,
+    )?;
     m.add_function(wrap_pyfunction!(slab::slab_simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(slab::slab_read_bands, m)?)?;
     m.add_function(wrap_pyfunction!(slab::phase_sample_cos, m)?)?;
     m.add_function(wrap_pyfunction!(slab::phase_eval, m)?)?;
     m.add_function(wrap_pyfunction!(physics::fresnel_reflectance, m)?)?;

@@ -3,11 +3,12 @@
 use crate::runner;
 use dentalux_core::instrument::{Window, WINDOW_KEYS};
 use dentalux_core::integrators::slab::{
-    simulate, Estimator, Incidence, SlabConfig, SlabLayer, SCALAR_KEYS,
+    simulate, simulate_all, BackingOrders, Estimator, Incidence, SlabConfig, SlabLayer, SCALAR_KEYS,
 };
 use dentalux_core::medium::Medium;
 use dentalux_core::phase::PhaseFunction;
 use dentalux_core::rng::Stream;
+use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -52,13 +53,7 @@ pub fn slab_simulate<'py>(
     window: Option<WindowTuple>,
     progress: Option<PyObject>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut stack = Vec::with_capacity(layers.len());
-    for (i, (mua, mus, g, fd, n, thickness, lobes)) in layers.into_iter().enumerate() {
-        let name = format!("layers[{i}].");
-        let phase = phase_from(&name, g, fd, lobes)?;
-        let medium = Medium::new(&name, mua, mus, n, phase).map_err(runner::to_py_err)?;
-        stack.push(SlabLayer { medium, thickness });
-    }
+    let stack = stack_from(layers, "")?;
     let incidence = Incidence::parse(incidence, angle_deg).map_err(runner::to_py_err)?;
     let estimator = Estimator::parse(estimator).map_err(runner::to_py_err)?;
     let cfg = SlabConfig {
@@ -79,6 +74,7 @@ pub fn slab_simulate<'py>(
             backing,
             cone: cone.map(|(lo, hi)| (lo.to_radians(), hi.to_radians())),
         }),
+        backing_orders: None,
     };
     cfg.validate().map_err(runner::to_py_err)?;
     let res = runner::run(py, threads, progress, |c| simulate(&cfg, c))?;
@@ -105,6 +101,101 @@ pub fn slab_simulate<'py>(
         out.set_item("window", win)?;
         out.set_item("window_stderr", win_err)?;
     }
+    Ok(out)
+}
+
+/// Layers of one stack, checked, with `name` prefixing errors.
+fn stack_from(layers: Vec<LayerTuple>, prefix: &str) -> PyResult<Vec<SlabLayer>> {
+    let mut stack = Vec::with_capacity(layers.len());
+    for (i, (mua, mus, g, fd, n, thickness, lobes)) in layers.into_iter().enumerate() {
+        let name = format!("{prefix}layers[{i}].");
+        let phase = phase_from(&name, g, fd, lobes)?;
+        let medium = Medium::new(&name, mua, mus, n, phase).map_err(runner::to_py_err)?;
+        stack.push(SlabLayer { medium, thickness });
+    }
+    Ok(stack)
+}
+
+/// Read a specimen through an instrument window in every band at once, tallying the window
+/// by backing order (`dentalux.reading`): one stack per band, each band's stream keyed by
+/// `band_keys`. Returns `order_sums` as an array (bands, replicates, orders + 1, window
+/// keys), `batch_photons` (photons per replicate) and `truncated` (per band).
+#[pyfunction]
+#[pyo3(signature = (bands, band_keys, n_photons, seed, window, max_order, survival,
+    n_above=1.0, n_below=1.0, incidence="normal", angle_deg=0.0, estimator="weighted",
+    threads=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn slab_read_bands<'py>(
+    py: Python<'py>,
+    bands: Vec<Vec<LayerTuple>>,
+    band_keys: Vec<u64>,
+    n_photons: u64,
+    seed: u64,
+    window: WindowTuple,
+    max_order: usize,
+    survival: f64,
+    n_above: f64,
+    n_below: f64,
+    incidence: &str,
+    angle_deg: f64,
+    estimator: &str,
+    threads: Option<usize>,
+    progress: Option<PyObject>,
+) -> PyResult<Bound<'py, PyDict>> {
+    if bands.len() != band_keys.len() || bands.is_empty() {
+        return Err(PyValueError::new_err(
+            "bands and band_keys: one stream key per band, at least one band",
+        ));
+    }
+    let incidence = Incidence::parse(incidence, angle_deg).map_err(runner::to_py_err)?;
+    let estimator = Estimator::parse(estimator).map_err(runner::to_py_err)?;
+    let (a, b, rs, _, cone) = window;
+    let window = Window {
+        illuminated_radius: a,
+        viewed_radius: b,
+        specimen_radius: rs,
+        backing: 0.0,
+        cone: cone.map(|(lo, hi)| (lo.to_radians(), hi.to_radians())),
+    };
+    let mut cfgs = Vec::with_capacity(bands.len());
+    for (k, (layers, key)) in bands.into_iter().zip(band_keys).enumerate() {
+        cfgs.push(SlabConfig {
+            layers: stack_from(layers, &format!("bands[{k}]."))?,
+            n_above,
+            n_below,
+            incidence,
+            estimator,
+            n_photons,
+            seed,
+            band: key,
+            radial: None,
+            angular_bins: None,
+            window: Some(window),
+            backing_orders: Some(BackingOrders {
+                max_order,
+                survival,
+            }),
+        });
+    }
+    for cfg in &cfgs {
+        cfg.validate().map_err(runner::to_py_err)?;
+    }
+    let results = runner::run(py, threads, progress, |c| simulate_all(&cfgs, c))?;
+    let n_bands = results.len();
+    let n_batches = results[0].batch_photons.len();
+    let sums: Vec<f64> = results
+        .iter()
+        .flat_map(|r| r.order_sums.iter().copied())
+        .collect();
+    let shape = [n_bands, n_batches, max_order + 1, WINDOW_KEYS.len()];
+    let out = PyDict::new(py);
+    out.set_item("order_sums", PyArray1::from_vec(py, sums).reshape(shape)?)?;
+    out.set_item("batch_photons", results[0].batch_photons.clone())?;
+    out.set_item(
+        "truncated",
+        results.iter().map(|r| r.truncated).collect::<Vec<_>>(),
+    )?;
+    out.set_item("window_keys", WINDOW_KEYS.to_vec())?;
     Ok(out)
 }
 

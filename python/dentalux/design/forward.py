@@ -1,11 +1,11 @@
 """The fast forward model that drives a design search: a Monte Carlo response surface.
 
 For a restoration of k layers (1 to 3) with thickness ranges, the full specimen (layers,
-cement, substrate; :mod:`dentalux.design.substrates`) is read by the slab Monte Carlo
-through the instrument (:mod:`dentalux.instrument`: lit spot, window, backing inside the
-walk, so the edge loss is in every number) at the nodes of a regular grid in thickness
-space, ``nodes`` per layer, for every band: the reading over the white backing and, when a
-translucency target is given, over the black one. Every node runs with the same seed
+cement, substrate; :mod:`dentalux.design.substrates`) is read by the reading engine
+(:mod:`dentalux.reading`: the instrument's lit spot, window and backing inside the walk, so
+the edge loss is in every number) at the nodes of a regular grid in thickness space,
+``nodes`` per layer, for every band: the reading over the white backing and, when a
+translucency target is given, over the black one (the same walk). Every node runs with the same seed
 (common random numbers; measured, they correlate the nodes' noise only weakly).
 
 The nodes are evenly spaced in log thickness (densest at the thin end, where a reading
@@ -27,7 +27,8 @@ import numpy as np
 from scipy.interpolate import make_interp_spline
 
 from dentalux.color import delta_e00
-from dentalux.slab import Layer, simulate
+from dentalux import reading
+from dentalux.slab import Layer
 
 DEFAULT_NODES = {1: 6, 2: 4, 3: 3}
 DATA_MARGIN_NM = 25.0
@@ -60,18 +61,6 @@ def axis_weights(nodes: np.ndarray, t) -> np.ndarray:
     k = min(3, n - 1)
     spline = make_interp_spline(np.log(nodes), np.eye(n), k=k)
     return np.asarray(spline(np.log(np.clip(t, nodes[0], nodes[-1]))))
-
-
-def _adding(top, bottom, rb: float) -> tuple[float, float]:
-    """R(rb) = R1 + T1 rb T2 / (1 - rb R2) and its first-order standard error."""
-    r1, t1 = top.total_reflectance, top.total_transmittance
-    r2, t2 = bottom.total_reflectance, bottom.total_transmittance
-    q = 1.0 / (1.0 - rb * r2)
-    value = r1 + t1 * rb * t2 * q
-    grads = (1.0, rb * t2 * q, t1 * rb * q, t1 * rb * t2 * rb * q * q)
-    errs = (top.stderr["total_reflectance"], top.stderr["total_transmittance"],
-            bottom.stderr["total_transmittance"], bottom.stderr["total_reflectance"])
-    return value, float(np.sqrt(sum((g * e) ** 2 for g, e in zip(grads, errs, strict=True))))
 
 
 class ColourMap:
@@ -111,51 +100,36 @@ class Surface:
         # exp(-t / tau), with tau as short as 0.2 mm for an absorbing, scattering shade, so it
         # changes fastest at the thin end, where the nodes are densest
         self.nodes = [np.geomspace(lo, hi, n) for lo, hi in self.ranges]
-        channels = [("white", rb_white, 100_000)] + ([("black", rb_black, 0)] if black else [])
+        channels = ["white"] + (["black"] if black else [])
         shape = tuple(len(x) for x in self.nodes)
         self.values = np.zeros(shape + (len(channels), len(wl)))
         self.errors = np.zeros_like(self.values)
         optics = [m.at(wl) for m in parts] + [m.at(wl) for m, _ in tail]
         tail_t = [float(t) for _, t in tail]
-        incidence = inst.spec.incidence
-        n_below = 1.0 if inst.contact_index is None else float(inst.contact_index)
         index = list(np.ndindex(*shape))
         self.photons = 0
+        self.cpu_seconds = 0.0
         from dentalux.progress import bar
 
-        with bar(len(index) * len(wl), "design nodes x bands", progress) as cb:
+        # every node is one reading of the engine (dentalux.reading): both backings from
+        # the same walk, every node with the same seed
+        pick = [reading.CHANNELS.index(f"over_{c}") for c in channels]
+        with bar(len(index), "design nodes", progress) as cb:
             for step, idx in enumerate(index):
                 thick = [self.nodes[d][i] for d, i in enumerate(idx)] + tail_t
-                for b in range(len(wl)):
-                    stack = [Layer(mua=float(o.mua[b]), mus=float(o.mus[b]), g=float(o.g[b]),
-                                   n=float(o.n[b]), thickness=t, fd=float(o.fd[b]))
-                             for o, t in zip(optics, thick, strict=True)]
-                    common = dict(n_photons=int(photons), seed=int(seed),
-                                  estimator=estimator, threads=threads)
-                    if inst.is_infinite:
-                        # the adding formula of dental.read's infinite geometry: R1, T1 for
-                        # the beam from above, R2, T2 for diffuse light from below
-                        a = simulate(stack, band=b, n_above=1.0, n_below=n_below, **common)
-                        f = simulate(stack[::-1], band=100_000 + b, n_above=n_below,
-                                     n_below=1.0, incidence="diffuse", **common)
-                        self.photons += 2 * int(photons)
-                        for c, (_, rb, _) in enumerate(channels):
-                            v, e = _adding(a, f, float(rb[b]))
-                            self.values[idx + (c, b)] = v
-                            self.errors[idx + (c, b)] = e
-                        if cb:
-                            cb(step * len(wl) + b + 1)
-                        continue
-                    for c, (_, rb, band0) in enumerate(channels):
-                        res = simulate(stack, band=band0 + b, n_above=1.0, n_below=n_below,
-                                       incidence=incidence, window=inst.window(float(rb[b])),
-                                       **common)
-                        v, e = inst.reading(res.window, res.window_stderr)
-                        self.values[idx + (c, b)] = v
-                        self.errors[idx + (c, b)] = e
-                        self.photons += int(photons)
-                    if cb:
-                        cb(step * len(wl) + b + 1)
+                band_stacks = [
+                    [Layer(mua=float(o.mua[b]), mus=float(o.mus[b]), g=float(o.g[b]),
+                           n=float(o.n[b]), thickness=t, fd=float(o.fd[b]))
+                     for o, t in zip(optics, thick, strict=True)]
+                    for b in range(len(wl))]
+                got = reading.measure(band_stacks, wl, inst, rb_black, rb_white, photons,
+                                      seed, estimator, threads, False)
+                self.values[idx] = got.values[pick]
+                self.errors[idx] = got.stderr[pick]
+                self.photons += got.photons
+                self.cpu_seconds += got.cpu_seconds
+                if cb:
+                    cb(step + 1)
 
     # -- interpolation -----------------------------------------------------------------
 

@@ -290,14 +290,24 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
             lab_err = [mc.stderr[f"lab_white.{c}"] for c in "Lab"]
             de_mc = float(delta_e00(np.asarray(lab), np.asarray(tgt.lab)))
             de_err = verify.delta_e_stderr(lab, lab_err, tgt.lab, tgt.lab_stderr)
-            note = ("the fast model agrees with the Monte Carlo read within "
-                    f"{verify.SIGMAS:g} standard errors (max |z| = {cmp['max_abs_z']:.2f})"
-                    if cmp["verified"] else
-                    f"NOT VERIFIED: the fast model and the Monte Carlo read differ by max |z| "
-                    f"= {cmp['max_abs_z']:.2f} > {verify.SIGMAS:g} standard errors; the "
-                    "numbers reported are the Monte Carlo's")
+            if cmp["verified"]:
+                note = ("the fast model agrees with the Monte Carlo read within "
+                        f"{verify.SIGMAS:g} standard errors (max |z| = "
+                        f"{cmp['max_abs_z']:.2f}), which would have caught a disagreement of "
+                        f"ΔE00 {cmp['resolution_delta_e00']:.2f}")
+            elif not cmp["agrees"]:
+                note = (f"NOT VERIFIED: the fast model and the Monte Carlo read differ by max "
+                        f"|z| = {cmp['max_abs_z']:.2f} > {verify.SIGMAS:g} standard errors; "
+                        "the numbers reported are the Monte Carlo's")
+            else:
+                note = (f"NOT VERIFIED (inconclusive): {verify.SIGMAS:g} standard errors "
+                        f"amount to ΔE00 {cmp['resolution_delta_e00']:.2f}, more than a "
+                        f"perceptible {dental.PT}; the check could not have failed. Give more "
+                        "photons (--verify-photons, --photons or --precision)")
             design.update(lab=lab, lab_stderr=lab_err, delta_e00=de_mc, delta_e00_stderr=de_err,
-                          verdict=dental.verdict(de_mc), verified=cmp["verified"])
+                          verdict=dental.verdict(de_mc, de_err),
+                          verdict_probability=dental.verdict_probabilities(de_mc, de_err),
+                          verified=cmp["verified"])
             if tp:
                 dtp = abs(mc.tp00 - tgt.tp00)
                 design.update(tp00=mc.tp00, tp00_stderr=mc.stderr["tp00"], delta_tp00=dtp,
@@ -308,12 +318,15 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
                 "photons_per_band_and_run": verify_photons, "seed": seed + 1,
                 "sigmas": verify.SIGMAS, "z": cmp["z"], "max_abs_z": cmp["max_abs_z"],
                 "delta_e00_fast_vs_mc": cmp["delta_e00_fast_vs_mc"], "seconds": seconds,
-                "note": note}
+                "resolution_delta_e00": cmp["resolution_delta_e00"],
+                "could_fail": cmp["could_fail"], "note": note}
         else:
             de_f = fast["values"]["delta_e00"]
             design.update(lab=fast["values"]["lab_white"], lab_stderr=fast["stderr"]["lab_white"],
                           delta_e00=de_f, delta_e00_stderr=fast_de_err,
-                          verdict=dental.verdict(de_f), verified=False)
+                          verdict=dental.verdict(de_f, fast_de_err),
+                          verdict_probability=dental.verdict_probabilities(de_f, fast_de_err),
+                          verified=False)
             if tp:
                 dtp = abs(fast["values"]["tp00"] - tgt.tp00)
                 design.update(tp00=fast["values"]["tp00"], tp00_stderr=fast["stderr"]["tp00"],

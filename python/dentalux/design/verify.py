@@ -4,7 +4,10 @@ The design's specimen is read by :func:`dentalux.dental.read` (the same forward 
 ``dentalux shade --layer``), with a different seed from the search's response surface, so
 the two are independent estimates. A design is ``verified`` when every compared number
 (L*, a*, b* over the white backing, and TP00 where a TP target is given) agrees with the
-fast model within ``SIGMAS`` combined standard errors, sqrt(s_fast^2 + s_mc^2).
+fast model within ``SIGMAS`` combined standard errors, sqrt(s_fast^2 + s_mc^2), and the
+verification could have failed: ``SIGMAS`` combined standard errors amount to less than a
+perceptible difference (ΔE00 0.8) at the design's colour. A verification too noisy to see a
+perceptible disagreement verifies nothing and says so.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ import math
 import numpy as np
 
 from dentalux import dental
-from dentalux.color import delta_e00
+from dentalux.color import delta_e00, delta_e00_scale
 
 SIGMAS = 4.0
 
@@ -44,6 +47,12 @@ def compare(fast: dict, mc: dental.DentalMetrics, tp: bool) -> dict:
         s = math.hypot(fast["stderr"]["tp00"], mc.stderr["tp00"])
         z["tp00"] = (fast["values"]["tp00"] - mc.tp00) / s if s else 0.0
     worst = max(abs(v) for v in z.values())
-    return {"z": z, "max_abs_z": worst, "verified": bool(worst <= SIGMAS),
+    combined = [math.hypot(fast["stderr"]["lab_white"][j], mc.stderr[f"lab_white.{c}"])
+                for c, j in keys]
+    resolution = SIGMAS * delta_e00_scale(mc.lab_white, combined)
+    could_fail = resolution <= dental.PT
+    return {"z": z, "max_abs_z": worst, "verified": bool(worst <= SIGMAS and could_fail),
+            "agrees": bool(worst <= SIGMAS), "resolution_delta_e00": resolution,
+            "could_fail": bool(could_fail),
             "delta_e00_fast_vs_mc": float(delta_e00(np.asarray(fast["values"]["lab_white"]),
                                                     np.asarray(mc.lab_white)))}

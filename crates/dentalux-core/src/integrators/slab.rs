@@ -142,7 +142,33 @@ pub struct SlabConfig {
     /// An instrument's finite lit spot, window and backing; `None` for the laterally
     /// infinite slab in the media above and below.
     pub window: Option<Window>,
+    /// Tally the window by backing order instead of using the window's backing (see
+    /// [`BackingOrders`]); needs a window.
+    pub backing_orders: Option<BackingOrders>,
 }
+
+/// Every backing from one walk. A Lambertian backing of reflectance R_b returns what reaches
+/// it with the same (cosine) direction law whatever R_b is, so a walk's history does not
+/// depend on R_b except through the factor R_b per reflection. The walk therefore always
+/// reflects at the backing, counts the reflections k, and tallies each window exit by k:
+/// the reading over any backing is then the polynomial Σ_k V_k R_b^k, exactly, and every
+/// backing is read from the same photons (their noise shared). Order k + 1 is reached by
+/// survival roulette with probability `survival` (the weight divided by it), so walks under
+/// a bright backing end; a walk reaching `max_order` backing reflections is cut and its
+/// weight tallied as truncated (the polynomial misses it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BackingOrders {
+    /// Highest order tallied, in [1, [`MAX_BACKING_ORDER`]].
+    pub max_order: usize,
+    /// Probability of continuing after a backing reflection, in (0, 1].
+    pub survival: f64,
+}
+
+/// Most replicates (groups of consecutive batches) a backing-order run returns.
+pub const REPLICATES: usize = 64;
+
+/// Highest backing order a run may tally (bounds its memory: orders × 6 tallies per batch).
+pub const MAX_BACKING_ORDER: usize = 1024;
 
 /// Most bins of a radial or angular profile (`dentalux.limits` reads it): each batch keeps
 /// its own copies, so the cap bounds a run's profile memory before anything is allocated.
@@ -167,7 +193,8 @@ const TOT_T: usize = 5;
 const ABS: usize = 6;
 /// Per-photon scalars: [`SCALAR_KEYS`] then the window's [`instrument::WINDOW_KEYS`].
 const N_SCALARS: usize = 7;
-const N_TALLIES: usize = N_SCALARS + instrument::WINDOW_KEYS.len();
+const N_WINDOW: usize = instrument::WINDOW_KEYS.len();
+const N_TALLIES: usize = N_SCALARS + N_WINDOW;
 
 /// What a slab run measured; all fractions of the incident power.
 #[derive(Debug, Clone, PartialEq)]
@@ -193,6 +220,14 @@ pub struct SlabResult {
     pub window: [f64; 6],
     /// Their standard errors.
     pub window_stderr: [f64; 6],
+    /// With [`BackingOrders`]: each replicate's sums of the window tallies by backing order,
+    /// `[replicate][order][key]` flattened (keys [`instrument::WINDOW_KEYS`]); a replicate
+    /// is a group of consecutive batches, at most [`REPLICATES`]. Empty otherwise.
+    pub order_sums: Vec<f64>,
+    /// Photons of each replicate (with [`BackingOrders`]).
+    pub batch_photons: Vec<u64>,
+    /// Weight cut at the highest backing order, per photon launched.
+    pub truncated: f64,
 }
 
 impl SlabResult {
@@ -261,6 +296,20 @@ impl SlabConfig {
         if let Some(w) = &self.window {
             w.validate()?;
         }
+        if let Some(o) = &self.backing_orders {
+            if self.window.is_none() {
+                return Err(Error::InvalidInput(
+                    "backing orders need an instrument window".into(),
+                ));
+            }
+            if o.max_order == 0 || o.max_order > MAX_BACKING_ORDER {
+                return Err(Error::InvalidInput(format!(
+                    "backing max_order = {} is out of range: allowed [1, {MAX_BACKING_ORDER}]",
+                    o.max_order
+                )));
+            }
+            check_range("backing survival", o.survival, 0.0, true, 1.0, false, "")?;
+        }
         Ok(())
     }
 }
@@ -275,6 +324,12 @@ struct Tally {
     radial_t: Vec<f64>,
     angle_r: Vec<f64>,
     angle_t: Vec<f64>,
+    /// Window tallies by backing order, `[order][key]` (empty without [`BackingOrders`]).
+    orders: Vec<f64>,
+    /// Weight of walks cut at the highest backing order.
+    truncated: f64,
+    /// Backing order of the photon being traced.
+    order: usize,
 }
 
 impl Tally {
@@ -289,6 +344,9 @@ impl Tally {
             radial_t: vec![0.0; rb],
             angle_r: vec![0.0; ab],
             angle_t: vec![0.0; ab],
+            orders: vec![0.0; cfg.backing_orders.map_or(0, |o| o.max_order + 1) * N_WINDOW],
+            truncated: 0.0,
+            order: 0,
         }
     }
     fn merge(&mut self, o: &Tally) {
@@ -300,6 +358,8 @@ impl Tally {
         add(&mut self.radial_t, &o.radial_t);
         add(&mut self.angle_r, &o.angle_r);
         add(&mut self.angle_t, &o.angle_t);
+        add(&mut self.orders, &o.orders);
+        self.truncated += o.truncated;
     }
 }
 
@@ -332,11 +392,36 @@ pub fn simulate(cfg: &SlabConfig, control: &Control) -> Result<SlabResult> {
             Ok(tally)
         })
         .collect();
+    let tallies = tallies?;
     let mut total = Tally::new(cfg);
-    for t in &tallies? {
+    for t in &tallies {
         total.merge(t);
     }
-    Ok(tracer.finish(&total))
+    let mut res = tracer.finish(&total);
+    if cfg.backing_orders.is_some() {
+        // consecutive batches pooled into at most REPLICATES groups: independent replicates
+        // whose spread gives the standard error of anything computed from the polynomial
+        let groups = (n_batches as usize).min(REPLICATES);
+        let width = total.orders.len();
+        res.order_sums = vec![0.0; groups * width];
+        res.batch_photons = vec![0; groups];
+        for (b, t) in tallies.iter().enumerate() {
+            let g = b * groups / n_batches as usize;
+            let slot = &mut res.order_sums[g * width..(g + 1) * width];
+            slot.iter_mut().zip(&t.orders).for_each(|(x, y)| *x += y);
+            res.batch_photons[g] += batch.min(cfg.n_photons - b as u64 * batch);
+        }
+    }
+    Ok(res)
+}
+
+/// Run several slab configurations (a specimen's bands) on the current rayon pool; each
+/// gives the numbers [`simulate`] gives it alone.
+pub fn simulate_all(cfgs: &[SlabConfig], control: &Control) -> Result<Vec<SlabResult>> {
+    for cfg in cfgs {
+        cfg.validate()?;
+    }
+    cfgs.par_iter().map(|cfg| simulate(cfg, control)).collect()
 }
 
 /// Per-layer constants of the walk, computed once per run instead of once per step.
@@ -408,6 +493,8 @@ struct Tracer<'a> {
     backing: f64,
     /// 1 / the Lambertian fraction of the detector cone.
     inv_cone_fraction: f64,
+    /// Backing-order tallies (the window's backing then unused).
+    orders: Option<BackingOrders>,
 }
 
 impl<'a> Tracer<'a> {
@@ -443,6 +530,7 @@ impl<'a> Tracer<'a> {
             rim2: win.map_or(f64::INFINITY, |w| w.specimen_radius * w.specimen_radius),
             backing: win.map_or(0.0, |w| w.backing),
             inv_cone_fraction: win.map_or(1.0, |w| 1.0 / w.cone_fraction()),
+            orders: cfg.backing_orders,
         }
     }
 
@@ -467,7 +555,7 @@ impl<'a> Tracer<'a> {
             ph[TOT_T] += w;
         }
         if let Some(win) = &self.cfg.window {
-            self.exit_window(win, pos, d.z, w, top, ph);
+            self.exit_window(win, pos, d.z, w, top, ph, t);
         }
         if let Some((bins, rmax)) = self.cfg.radial {
             let r = (pos.x * pos.x + pos.y * pos.y).sqrt();
@@ -489,6 +577,15 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    /// Add `w` to window tally `key`, and to its slot of the photon's backing order.
+    #[inline]
+    fn window_add(&self, key: usize, w: f64, ph: &mut Photon, t: &mut Tally) {
+        ph[N_SCALARS + key] += w;
+        if !t.orders.is_empty() {
+            t.orders[t.order * N_WINDOW + key] += w;
+        }
+    }
+
     /// Tally power `w` leaving at `pos` (|cos θ| = `cos_exit` in the medium outside)
     /// against the window: inside or outside it on the top, inside it on the bottom.
     /// Returns whether `pos` lies inside the window.
@@ -500,31 +597,32 @@ impl<'a> Tracer<'a> {
         w: f64,
         top: bool,
         ph: &mut Photon,
+        t: &mut Tally,
     ) -> bool {
         let r2 = pos.x * pos.x + pos.y * pos.y;
         let inside = r2 <= win.viewed_radius * win.viewed_radius;
         if !top {
             if inside {
-                ph[N_SCALARS + instrument::VIEWED_T] += w;
+                self.window_add(instrument::VIEWED_T, w, ph, t);
             }
         } else if inside {
-            ph[N_SCALARS + instrument::VIEWED_R] += w;
+            self.window_add(instrument::VIEWED_R, w, ph, t);
             if win.in_cone(cos_exit) {
-                ph[N_SCALARS + instrument::VIEWED_CONE] += w * self.inv_cone_fraction;
+                self.window_add(instrument::VIEWED_CONE, w * self.inv_cone_fraction, ph, t);
             }
         } else {
-            ph[N_SCALARS + instrument::OUTSIDE_R] += w;
+            self.window_add(instrument::OUTSIDE_R, w, ph, t);
         }
         inside
     }
 
     /// The first-surface specular reflection of power `w` at the entry point `pos`.
-    fn specular(&self, pos: Vec3, cos_in: f64, w: f64, ph: &mut Photon) {
+    fn specular(&self, pos: Vec3, cos_in: f64, w: f64, ph: &mut Photon, t: &mut Tally) {
         ph[SPEC] += w;
         ph[TOT_R] += w;
         if let Some(win) = &self.cfg.window {
-            if self.exit_window(win, pos, cos_in, w, true, ph) {
-                ph[N_SCALARS + instrument::VIEWED_SPEC] += w;
+            if self.exit_window(win, pos, cos_in, w, true, ph, t) {
+                self.window_add(instrument::VIEWED_SPEC, w, ph, t);
             }
         }
     }
@@ -546,6 +644,7 @@ impl<'a> Tracer<'a> {
         let cfg = self.cfg;
         let weighted = cfg.estimator == Estimator::Weighted;
         let n_layers = self.layers.len() as isize;
+        t.order = 0;
         // launch direction in the medium above
         let d_above = match cfg.incidence {
             Incidence::Normal => Vec3::Z,
@@ -565,13 +664,13 @@ impl<'a> Tracer<'a> {
         let (r0, cos_t0) = reflectance_and_cos_t(d_above.z, cfg.n_above, eta0);
         let mut w = 1.0;
         if weighted {
-            self.specular(pos, d_above.z, r0, ph);
+            self.specular(pos, d_above.z, r0, ph, t);
             w = 1.0 - r0;
             if w <= 0.0 {
                 return Ok(());
             }
         } else if rng.uniform() < r0 {
-            self.specular(pos, d_above.z, 1.0, ph);
+            self.specular(pos, d_above.z, 1.0, ph, t);
             return Ok(());
         }
         let k = cfg.n_above / eta0;
@@ -608,7 +707,7 @@ impl<'a> Tracer<'a> {
                 // interaction inside layer li (eqs. 2–4)
                 pos += d * s;
                 if self.beyond_rim(pos) {
-                    ph[N_SCALARS + instrument::RIM] += w;
+                    self.window_add(instrument::RIM, w, ph, t);
                     return Ok(());
                 }
                 if roulette {
@@ -646,7 +745,7 @@ impl<'a> Tracer<'a> {
             pos += d * db;
             pos.z = if down { lc.z_bot } else { lc.z_top };
             if self.beyond_rim(pos) {
-                ph[N_SCALARS + instrument::RIM] += w;
+                self.window_add(instrument::RIM, w, ph, t);
                 return Ok(());
             }
             let next = if down { layer + 1 } else { layer - 1 };
@@ -662,6 +761,15 @@ impl<'a> Tracer<'a> {
                 continue;
             }
             d = d_t;
+            if outside && down && self.orders.is_some() {
+                match self.backing_orders_bounce(rng, pos, &mut d, &mut w, ph, t) {
+                    Some(()) => {
+                        scattered = true;
+                        continue;
+                    }
+                    None => return Ok(()),
+                }
+            }
             if outside && down && self.backing > 0.0 {
                 // the backing under the stack (zero gap, in the medium below)
                 let hit =
@@ -729,6 +837,51 @@ impl<'a> Tracer<'a> {
         None
     }
 
+    /// Light reaching the backing at `pos` with backing orders: its arrival inside the window
+    /// is the transmitted tally of the current order; it is always reflected (the factor R_b
+    /// is the polynomial's), continuing to the next order by the survival roulette, and
+    /// re-enters the bottom layer by the Fresnel roulette or falls back onto the backing.
+    /// Returns `Some` with `d` pointing up inside the bottom layer, or `None` once ended.
+    fn backing_orders_bounce(
+        &self,
+        rng: &mut Stream,
+        pos: Vec3,
+        d: &mut Vec3,
+        w: &mut f64,
+        ph: &mut Photon,
+        t: &mut Tally,
+    ) -> Option<()> {
+        let (Some(orders), Some(win)) = (&self.orders, &self.cfg.window) else {
+            return None;
+        };
+        let n_below = self.cfg.n_below;
+        let eta = self.layers[self.layers.len() - 1].eta;
+        for _ in 0..MAX_BACKING_BOUNCES {
+            self.exit_window(win, pos, d.z, *w, false, ph, t);
+            if t.order >= orders.max_order {
+                t.truncated += *w;
+                return None;
+            }
+            if orders.survival < 1.0 {
+                if rng.uniform() >= orders.survival {
+                    return None;
+                }
+                *w /= orders.survival;
+            }
+            t.order += 1;
+            let up = cosine_hemisphere(rng.uniform2());
+            let (r, cos_t) = reflectance_and_cos_t(up.z, n_below, eta);
+            if r >= 1.0 || (r > 0.0 && rng.uniform() < r) {
+                continue;
+            }
+            let k = n_below / eta;
+            *d = Vec3::new(up.x * k, up.y * k, -cos_t);
+            return Some(());
+        }
+        t.truncated += *w;
+        None
+    }
+
     fn finish(&self, t: &Tally) -> SlabResult {
         let n = self.cfg.n_photons as f64;
         let mut values = [0.0; N_TALLIES];
@@ -772,305 +925,13 @@ impl<'a> Tracer<'a> {
             radial_transmittance: per_area(&t.radial_t),
             angular_reflectance: t.angle_r.iter().map(|x| x / n).collect(),
             angular_transmittance: t.angle_t.iter().map(|x| x / n).collect(),
+            order_sums: Vec::new(),
+            batch_photons: Vec::new(),
+            truncated: t.truncated / n,
         }
     }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    pub(crate) fn one_layer(
-        mua: f64,
-        mus: f64,
-        g: f64,
-        n: f64,
-        d: f64,
-        photons: u64,
-    ) -> SlabConfig {
-        SlabConfig {
-            layers: vec![SlabLayer {
-                medium: Medium::new("", mua, mus, n, PhaseFunction::HenyeyGreenstein { g })
-                    .unwrap(),
-                thickness: d,
-            }],
-            n_above: 1.0,
-            n_below: 1.0,
-            incidence: Incidence::Normal,
-            estimator: Estimator::Analog,
-            n_photons: photons,
-            seed: 1,
-            band: 0,
-            radial: None,
-            angular_bins: None,
-            window: None,
-        }
-    }
-
-    fn run(cfg: &SlabConfig) -> SlabResult {
-        simulate(cfg, &Control::new()).unwrap()
-    }
-
-    #[test]
-    fn energy_is_conserved_exactly_by_both_estimators() {
-        for est in [Estimator::Analog, Estimator::Weighted] {
-            for inc in [Incidence::Normal, Incidence::Diffuse, Incidence::Angle(0.7)] {
-                let mut cfg = one_layer(1.0, 9.0, 0.75, 1.4, 0.2, 20_000);
-                cfg.estimator = est;
-                cfg.incidence = inc;
-                let r = run(&cfg);
-                let sum = r.values[TOT_R] + r.values[TOT_T] + r.values[ABS];
-                assert!((sum - 1.0).abs() < 1e-9, "{est:?} {inc:?}: {sum}");
-                let parts = r.values[SPEC] + r.values[DIFF_R];
-                assert!((parts - r.values[TOT_R]).abs() < 1e-12);
-                let per_layer: f64 = r.absorbed_per_layer.iter().sum();
-                assert!((per_layer - r.values[ABS]).abs() < 1e-12);
-            }
-        }
-    }
-
-    #[test]
-    fn same_seed_same_numbers_for_any_thread_count() {
-        // several full batches and a partial one
-        let cfg = one_layer(0.5, 20.0, 0.9, 1.5, 1.0, 67 * batch_size(20_000) + 17);
-        let pool1 = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let pool3 = rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .unwrap();
-        let a = pool1.install(|| run(&cfg));
-        let b = pool3.install(|| run(&cfg));
-        assert_eq!(a, b);
-        let mut other = cfg.clone();
-        other.seed = 2;
-        assert_ne!(run(&other).values, a.values);
-    }
-
-    /// Non-scattering, non-absorbing slab: two incoherent Fresnel surfaces give
-    /// R = r + (1−r)² r / (1 − r²) (tooth-optics.md §7: 0.10853 for n = 1.63).
-    #[test]
-    fn clear_slab_matches_two_surface_fresnel() {
-        for est in [Estimator::Analog, Estimator::Weighted] {
-            let mut cfg = one_layer(0.0, 0.0, 0.0, 1.63, 1.0, 200_000);
-            cfg.estimator = est;
-            let res = run(&cfg);
-            let r = ((1.63f64 - 1.0) / 2.63).powi(2);
-            let r_tot = r + (1.0 - r).powi(2) * r / (1.0 - r * r);
-            assert!((r_tot - 0.10853).abs() < 1e-5);
-            let tol = 4.0 * res.stderr[TOT_R] + 1e-12;
-            assert!(
-                (res.values[TOT_R] - r_tot).abs() < tol,
-                "{est:?} {:?}",
-                res.values
-            );
-            assert_eq!(res.values[DIFF_T], 0.0);
-            assert!((res.values[UNSC_T] - (1.0 - r_tot)).abs() < tol);
-        }
-    }
-
-    /// Pure absorber, index matched: Beer–Lambert T = exp(−μa d).
-    #[test]
-    fn absorber_follows_beer_lambert() {
-        let res = run(&one_layer(2.0, 0.0, 0.0, 1.0, 0.5, 100_000));
-        let t = (-1.0f64).exp();
-        assert!((res.values[UNSC_T] - t).abs() < 4.0 * res.stderr[UNSC_T]);
-        assert_eq!(res.values[TOT_R], 0.0);
-    }
-
-    #[test]
-    fn profiles_add_up_to_the_totals() {
-        let mut cfg = one_layer(1.0, 9.0, 0.75, 1.0, 0.2, 50_000);
-        cfg.radial = Some((400, 40.0));
-        cfg.angular_bins = Some(30);
-        let r = run(&cfg);
-        let dr = 40.0 / 400.0;
-        let integ: f64 = r
-            .radial_reflectance
-            .iter()
-            .enumerate()
-            .map(|(i, x)| x * PI * dr * dr * ((i + 1) * (i + 1) - i * i) as f64)
-            .sum();
-        assert!((integ - r.values[DIFF_R]).abs() < 1e-3);
-        let ang: f64 = r.angular_transmittance.iter().sum();
-        assert!((ang - r.values[TOT_T]).abs() < 1e-12);
-    }
-
-    #[test]
-    fn bad_input_is_refused_with_the_field_named() {
-        let mut cfg = one_layer(1.0, 9.0, 0.75, 1.0, 0.2, 10);
-        cfg.layers[0].thickness = 0.0;
-        let e = simulate(&cfg, &Control::new()).unwrap_err().to_string();
-        assert!(e.contains("layers[0].thickness"), "{e}");
-        let mut cfg = one_layer(1.0, 9.0, 0.75, 1.0, 0.2, 0);
-        assert!(simulate(&cfg, &Control::new())
-            .unwrap_err()
-            .to_string()
-            .contains("photons"));
-        cfg.n_photons = 10;
-        cfg.layers[0].medium.sigma_a = -1.0;
-        let e = simulate(&cfg, &Control::new()).unwrap_err().to_string();
-        assert!(e.contains("layers[0].mua"), "{e}");
-        cfg.layers[0].medium.sigma_a = 1.0;
-        cfg.n_below = 0.5;
-        assert!(simulate(&cfg, &Control::new())
-            .unwrap_err()
-            .to_string()
-            .contains("n_below"));
-    }
-
-    fn windowed(a: f64, b: f64, backing: f64, photons: u64) -> SlabConfig {
-        let mut cfg = one_layer(0.05, 6.0, 0.9, 1.63, 1.0, photons);
-        cfg.estimator = Estimator::Weighted;
-        cfg.window = Some(Window {
-            illuminated_radius: a,
-            viewed_radius: b,
-            specimen_radius: f64::INFINITY,
-            backing,
-            cone: None,
-        });
-        cfg
-    }
-
-    fn w(r: &SlabResult, k: usize) -> (f64, f64) {
-        (r.window[k], r.window_stderr[k])
-    }
-
-    /// Viewed + outside the window + rim + into the backing + absorbed = 1 per photon.
-    #[test]
-    fn window_ledger_closes_for_both_estimators() {
-        for est in [Estimator::Analog, Estimator::Weighted] {
-            for (backing, rim) in [(0.0, f64::INFINITY), (0.9, f64::INFINITY), (0.5, 2.0)] {
-                let mut cfg = windowed(1.5, 1.0, backing, 20_000);
-                cfg.estimator = est;
-                cfg.window.as_mut().unwrap().specimen_radius = rim;
-                let r = run(&cfg);
-                let sum = r.window[instrument::VIEWED_R]
-                    + r.window[instrument::OUTSIDE_R]
-                    + r.window[instrument::RIM]
-                    + r.values[TOT_T]
-                    + r.values[ABS];
-                assert!((sum - 1.0).abs() < 1e-9, "{est:?} {backing} {rim}: {sum}");
-                let top = r.window[instrument::VIEWED_R] + r.window[instrument::OUTSIDE_R];
-                assert!((top - r.values[TOT_R]).abs() < 1e-9);
-                assert_eq!(r.window[instrument::RIM] > 0.0, rim.is_finite());
-            }
-        }
-    }
-
-    /// A backing inside the walk against the adding formula over runs without it,
-    /// R = R1 + T1 Rb T2 / (1 − Rb R2) (exact for an infinite slab on a Lambertian backing).
-    #[test]
-    fn backing_inside_the_walk_matches_the_adding_formula() {
-        let rb = 0.8;
-        let big = windowed(1e6, f64::INFINITY, rb, 200_000);
-        let inside = run(&big);
-        let mut top = one_layer(0.05, 6.0, 0.9, 1.63, 1.0, 200_000);
-        top.estimator = Estimator::Weighted;
-        let a = run(&top);
-        let mut below = top.clone();
-        below.incidence = Incidence::Diffuse;
-        below.band = 1;
-        let b = run(&below);
-        let (r1, t1, r2, t2) = (
-            a.values[TOT_R],
-            a.values[TOT_T],
-            b.values[TOT_R],
-            b.values[TOT_T],
-        );
-        let adding = r1 + t1 * rb * t2 / (1.0 - rb * r2);
-        let k = 1.0 / (1.0 - rb * r2);
-        let se = ((a.stderr[TOT_R]).powi(2)
-            + (t2 * rb * k * a.stderr[TOT_T]).powi(2)
-            + (t1 * rb * k * b.stderr[TOT_T]).powi(2)
-            + (t1 * rb * t2 * rb * k * k * b.stderr[TOT_R]).powi(2))
-        .sqrt();
-        let (v, v_se) = w(&inside, instrument::VIEWED_R);
-        let tol = 4.0 * (se * se + v_se * v_se).sqrt();
-        assert!(
-            (v - adding).abs() < tol,
-            "inside {v} adding {adding} ± {tol}"
-        );
-        // and the backing matters by far more than the tolerance
-        assert!(v - r1 > 20.0 * tol, "{v} vs {r1}");
-    }
-
-    /// Reciprocity: swapping the lit and the viewed radii leaves the reading
-    /// (viewed power / an ideal white's) unchanged.
-    #[test]
-    fn swapping_lit_and_viewed_radii_gives_the_same_reading() {
-        let reading = |a: f64, b: f64, band: u64| {
-            let mut cfg = windowed(a, b, 0.5, 400_000);
-            cfg.band = band;
-            let r = run(&cfg);
-            let f = cfg.window.unwrap().white_fraction();
-            let (v, se) = w(&r, instrument::VIEWED_R);
-            (v / f, se / f)
-        };
-        let (x, sx) = reading(3.0, 1.0, 0);
-        let (y, sy) = reading(1.0, 3.0, 1);
-        assert!(
-            (x - y).abs() < 4.0 * (sx * sx + sy * sy).sqrt(),
-            "{x} ± {sx} vs {y} ± {sy}"
-        );
-        // edge loss is real here: the reading is well below the infinite slab's
-        let (inf, _) = reading(1e6, f64::INFINITY, 2);
-        assert!(inf - x > 10.0 * sx, "{inf} vs {x}");
-    }
-
-    /// A cone over the whole hemisphere reads as the plain window; a ring reads a
-    /// Lambertian-normalised radiance factor, near the hemispherical one for a diffuse slab.
-    #[test]
-    fn detector_cone_normalises_by_its_lambertian_fraction() {
-        let mut cfg = windowed(1.0, 1.0, 0.0, 100_000);
-        cfg.window.as_mut().unwrap().cone = Some((0.0, 0.5 * PI));
-        let r = run(&cfg);
-        assert!((r.window[instrument::VIEWED_CONE] - r.window[instrument::VIEWED_R]).abs() < 1e-12);
-        // a thick white diffuser: exitance close to Lambertian
-        let mut cfg = one_layer(0.0, 50.0, 0.0, 1.0, 20.0, 100_000);
-        cfg.window = Some(Window {
-            illuminated_radius: 1e6,
-            viewed_radius: f64::INFINITY,
-            specimen_radius: f64::INFINITY,
-            backing: 0.0,
-            cone: Some((40f64.to_radians(), 50f64.to_radians())),
-        });
-        let r = run(&cfg);
-        let (cone, se) = w(&r, instrument::VIEWED_CONE);
-        let hemi = r.window[instrument::VIEWED_R];
-        assert!(hemi > 0.9, "{hemi}");
-        // a semi-infinite isotropic scatterer is not exactly Lambertian: within 5 %
-        assert!(
-            (cone / hemi - 1.0).abs() < 0.05 + 4.0 * se,
-            "{cone} vs {hemi}"
-        );
-    }
-
-    #[test]
-    fn window_off_leaves_the_numbers_unchanged() {
-        let cfg = one_layer(0.5, 20.0, 0.9, 1.5, 1.0, 10_000);
-        let plain = run(&cfg);
-        assert_eq!(plain.window, [0.0; 6]);
-        let mut with = cfg.clone();
-        with.window = Some(Window {
-            illuminated_radius: 0.0,
-            viewed_radius: f64::INFINITY,
-            specimen_radius: f64::INFINITY,
-            backing: 0.0,
-            cone: None,
-        });
-        let r = run(&with);
-        assert_eq!(r.values, plain.values);
-        assert!((r.window[instrument::VIEWED_R] - plain.values[TOT_R]).abs() < 1e-12);
-    }
-
-    #[test]
-    fn cancellation_stops_the_run() {
-        let cfg = one_layer(0.01, 100.0, 0.9, 1.5, 10.0, 10_000_000);
-        let c = Control::new();
-        c.cancel();
-        assert_eq!(simulate(&cfg, &c).unwrap_err(), Error::Cancelled);
-    }
-}
+#[path = "slab_tests.rs"]
+mod tests;
