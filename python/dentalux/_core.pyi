@@ -1,6 +1,7 @@
 """Type stubs of the private native module (see crates/dentalux-py)."""
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -10,6 +11,11 @@ __version__: str
 SLAB_MAX_PROFILE_BINS: int
 SLAB_SCALAR_KEYS: list[str]
 PHOTON_BYTES: int
+SLAB_MAX_BACKING_ORDER: int
+SLAB_WINDOW_KEYS: list[str]
+# random-stream keys of the reading engine's diffuse and transmitted runs (dentalux.reading)
+DIFFUSE_RUN_KEY: int
+TRANSMITTED_RUN_KEY: int
 
 # One layer as Python passes it: (mua, mus, g, fd, n, thickness, lobes); dentalux.slab.Layer
 # builds it (its fields are in another order: mua, mus, g, n, thickness, fd, lobes).
@@ -34,6 +40,22 @@ def slab_simulate(
     window: WindowTuple | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> dict: ...
+def slab_read_bands(
+    bands: list[list[LayerTuple]],
+    band_keys: list[int],
+    n_photons: int,
+    seed: int,
+    window: WindowTuple,
+    max_order: int,
+    survival: float,
+    n_above: float = 1.0,
+    n_below: float = 1.0,
+    incidence: str = "normal",
+    angle_deg: float = 0.0,
+    estimator: str = "weighted",
+    threads: int | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> dict[str, Any]: ...
 def phase_sample_cos(
     n: int, g: float, fd: float = 0.0, lobes: list[tuple[float, float]] | None = None, seed: int = 0
 ) -> list[float]: ...
