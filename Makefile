@@ -69,9 +69,10 @@ rust-test:
 
 # The documentation site (mkdocs.yml) into site/, offline, warnings as errors: a broken link,
 # a page missing from the nav or a docstring the API reference cannot read fails it. The
-# command-line reference page is generated from the typer app at this build.
+# command-line reference page is generated from the typer app at this build. (Not --quiet:
+# it hides the warnings from --strict, and a broken link would pass.)
 docs: build-prod
-	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict
 
 py-test: build-prod
 	$(VENV)/bin/pytest -q
