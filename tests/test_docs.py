@@ -108,3 +108,13 @@ def test_tutorial_runs(page, tmp_path, monkeypatch):
             r = subprocess.run([DENTALUX, *args[1:]], capture_output=True, text=True,
                                timeout=300)
             assert r.returncode == 0, f"{page.name}: `{line}` failed:\n{r.stderr[-2000:]}"
+
+
+def test_make_test_builds_the_docs_strictly():
+    """`make test` runs `make docs`, which fails on warnings: --strict, and not --quiet (that
+    drops the warnings --strict counts, so a broken link would pass)."""
+    make = (ROOT / "Makefile").read_text()
+    test_rule = re.search(r"^test:(.*)$", make, re.M).group(1).split()
+    assert "docs" in test_rule
+    docs_recipe = re.search(r"^docs:.*\n((?:\t.*\n)+)", make, re.M).group(1)
+    assert "mkdocs build --strict" in docs_recipe and "--quiet" not in docs_recipe
