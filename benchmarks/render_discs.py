@@ -18,7 +18,7 @@ Error measure: per-pixel relative RMSE, sqrt(mean (I - R)^2) / mean(R).
 Targets (issue 5): vpm reaches 2 % relative RMSE at least 10x sooner than volpath; 100 M
 photons fit in under 3 GB (--memory-photons 100000000). The per-pixel error against an
 unbiased truth (volpath-nee, many samples) is benchmarks/render_discs_truth.py's: 1.86 % in
-85 s at 128x96, 13x sooner than volpath (docs/vpm-convergence.md, fifth session).
+85 s at 128x96, 13x sooner than volpath (docs/notes/2026-12-02-vpm-convergence.md, fifth session).
 
 The default resolution is 128x96 (the issue's 512x384 with --resolution 512x384; volpath's
 reference then takes hours on two cores). Timings are wall-clock on a possibly shared machine;

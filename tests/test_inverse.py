@@ -34,7 +34,8 @@ ROWS = {  # wavelength: (tt, tr, n) from the paper's Table 1; g = 0.75, d = 0.5 
 # ---------------------------------------------------------------- forward models
 
 def test_fresnel_moments_match_tabulated_boundary_numbers():
-    # tooth-optics.md 2.5: diffuse internal reflectance r_i for n = 1.50, 1.54, 1.63 (to air)
+    # docs/explanation/tooth-optics.md 2.5: diffuse internal reflectance r_i for n = 1.50,
+    # 1.54, 1.63 (to air)
     for n, r_i in ((1.50, 0.5963), (1.54, 0.6195), (1.63, 0.6652)):
         r_phi, r_j = moments(n, 1.0)
         assert abs(r_phi - r_i) < 1e-4
@@ -88,7 +89,7 @@ AD_CASES = [  # mua, mus, g, n, d
 
 
 def test_ad_reproduces_tooth_optics_anchors():
-    # tooth-optics.md section 7 (iadpython 0.5.3, 16/32 points): UR1, UT1
+    # docs/explanation/tooth-optics.md section 7 (iadpython 0.5.3, 16/32 points): UR1, UT1
     ad = get_model("ad")
     tt, tr = ad.forward(0.01, 6.0, Sample(g=0.96, n=1.63, thickness=1.0))
     assert abs(tr - 0.2156) < 5e-4 and abs(tt - 0.7475) < 5e-4

@@ -51,7 +51,7 @@ def test_fitted_tissues_keep_the_rest_of_their_source():
 
 
 def test_transcribed_values_match_the_reference_table():
-    # tooth-optics.md §1.1/§1.2 rows, read independently of the TOML file
+    # docs/explanation/tooth-optics.md §1.1/§1.2 rows, read independently of the TOML file
     rows = {
         ("enamel@zoller2018-kienle", 400): (0.06, 0.8, 0.9, 1.633),
         ("enamel@zoller2018-kienle", 700): (0.02, 0.2, 0.9, 1.633),
@@ -337,3 +337,20 @@ def test_fitted_file_with_confidence_intervals(tmp_path):
     p.write_text(FITTED.replace("mus_ci = [[3.9, 4.1], ", "mus_ci = ["))
     with pytest.raises(ValueError, match="mus_ci"):
         M.load(p)
+
+
+def test_cli_list_reads_at_80_columns(monkeypatch, capsys):
+    """`materials list` in an 80-column terminal: one line per name, no line over 80
+    characters, every name whole, a default name showing the variant it stands for."""
+    monkeypatch.setenv("COLUMNS", "80")
+    assert _cli(["materials", "list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert max(len(line) for line in lines) <= 80
+    names = M.names()
+    assert len(lines) <= len(names) + 5  # title, header, rule, caption: no wrapped rows
+    for name in names:
+        rows = [line for line in lines if line.split() and line.split()[0] == name]
+        assert len(rows) == 1, f"{name} is not on a line of its own, whole"
+        resolved = M.get(name).name
+        if resolved != name:
+            assert f"= {resolved}" in rows[0]

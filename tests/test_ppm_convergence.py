@@ -8,8 +8,8 @@ the mean of N passes has variance ~ N^-alpha. The bias of pass i is first order 
 boundaries (the volume estimate's kernel reaches out of the medium), r_i ~ i^-(1-alpha)/3 =
 i^-0.1, so the mean's bias falls like N^-0.1. Hence MSE(N) = a N^-0.7 + b N^-0.2: noise
 dominates early, the boundary bias late. That held with the spherical kernel (curve in
-docs/ppm-convergence.md); the boundary-aligned layer kernel (kernel_layer) removes the
-first-order boundary bias, and the slow test now checks that the error falls to the
+docs/notes/2026-11-22-ppm-convergence.md); the boundary-aligned layer kernel (kernel_layer)
+removes the first-order boundary bias, and the slow test now checks that the error falls to the
 reference's noise and the mean agrees with volpath.
 """
 
@@ -80,7 +80,7 @@ def test_ppm_convergence_curve_matches_theory():
     # error (reference noise removed) falls like the noise term, N^-0.35 or faster, until it
     # reaches the reference's own noise, and the image mean agrees within 4 standard errors.
     # (With the sphere kernel the curve levelled off at 0.19 and the mean was -9 %:
-    # docs/ppm-convergence.md.)
+    # docs/notes/2026-11-22-ppm-convergence.md.)
     e = {r[0]: r[1] for r in rows}
     assert e[8] < 8 ** -0.3 * e[1], rows
     assert e[128] < 0.05, rows

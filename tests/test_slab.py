@@ -296,7 +296,7 @@ def test_sample_between_glass_slides_matches_adding_doubling(estimator):
 @pytest.mark.parametrize(
     "mua, n_above, n, n_below, d, theta",
     [
-        (0.0, 1.0, 1.63, 1.0, 1.0, 0.0),  # tooth-optics.md §7: R = 0.10853
+        (0.0, 1.0, 1.63, 1.0, 1.0, 0.0),  # docs/explanation/tooth-optics.md §7: R = 0.10853
         (0.5, 1.0, 1.5, 1.0, 1.0, 0.0),
         (0.5, 1.33, 1.5, 1.0, 0.4, 0.0),  # water above, air below
         (0.2, 1.0, 1.54, 1.33, 1.0, 45.0),

@@ -1,11 +1,11 @@
 """The surface photon map's light where it is the only light: the ribbon in the umbra of
 Fig. 3's raised disc, lit through the disc and by the floor. `vpm` at the paper figures'
 surface-map settings (photons, `surface_k`, `surface_radius`) against the unbiased
-`volpath-nee`, per band, through a narrow camera on that spot (docs/figures.md, "The
-surface map's radius" and "The surface map's photon count"). With the paper's 1 M surface
-photons, 24 seeds read 450 nm 5 ± 1 % low there (the k-NN estimate's blur at k 800); with
-the 4 M the figures now use they read 0.996 ± 0.010. 12 seeds' 4 standard errors are about
-6 %."""
+`volpath-nee`, per band, through a narrow camera on that spot
+(docs/notes/2026-12-06-figures-timing.md, "The surface map's radius" and "The surface map's
+photon count"). With the paper's 1 M surface photons, 24 seeds read 450 nm 5 ± 1 % low
+there (the k-NN estimate's blur at k 800); with the 4 M the figures now use they read
+0.996 ± 0.010. 12 seeds' 4 standard errors are about 6 %."""
 
 from __future__ import annotations
 

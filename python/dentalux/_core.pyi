@@ -1,13 +1,28 @@
 """Type stubs of the private native module (see crates/dentalux-py)."""
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 __version__: str
+# facts Python reads instead of keeping copies (crates/dentalux-py/src/lib.rs)
+SLAB_MAX_PROFILE_BINS: int
+SLAB_SCALAR_KEYS: list[str]
+PHOTON_BYTES: int
+SLAB_MAX_BACKING_ORDER: int
+SLAB_WINDOW_KEYS: list[str]
+# random-stream keys of the reading engine's diffuse and transmitted runs (dentalux.reading)
+DIFFUSE_RUN_KEY: int
+TRANSMITTED_RUN_KEY: int
 
+# One layer as Python passes it: (mua, mus, g, fd, n, thickness, lobes); dentalux.slab.Layer
+# builds it (its fields are in another order: mua, mus, g, n, thickness, fd, lobes).
 LayerTuple = tuple[float, float, float, float, float, float, list[tuple[float, float]] | None]
+# An instrument window: (illuminated radius, viewed radius, specimen radius [mm], backing
+# reflectance, detector cone (low, high) [deg] or None).
+WindowTuple = tuple[float, float, float, float, tuple[float, float] | None]
 
 def slab_simulate(
     layers: list[LayerTuple],
@@ -22,8 +37,25 @@ def slab_simulate(
     band: int = 0,
     radial: tuple[int, float] | None = None,
     angular_bins: int | None = None,
+    window: WindowTuple | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> dict: ...
+def slab_read_bands(
+    bands: list[list[LayerTuple]],
+    band_keys: list[int],
+    n_photons: int,
+    seed: int,
+    window: WindowTuple,
+    max_order: int,
+    survival: float,
+    n_above: float = 1.0,
+    n_below: float = 1.0,
+    incidence: str = "normal",
+    angle_deg: float = 0.0,
+    estimator: str = "weighted",
+    threads: int | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> dict[str, Any]: ...
 def phase_sample_cos(
     n: int, g: float, fd: float = 0.0, lobes: list[tuple[float, float]] | None = None, seed: int = 0
 ) -> list[float]: ...
@@ -38,6 +70,12 @@ def render_band(
     settings_json: str,
     progress: Callable[[int], None] | None = None,
 ) -> tuple[npt.NDArray[np.float32], dict[str, float | int | str]]: ...
+def render_bands(
+    scene_json: str,
+    settings_json: str,
+    band_keys: list[int],
+    progress: Callable[[int], None] | None = None,
+) -> tuple[npt.NDArray[np.float32], list[dict[str, float | int | str]]]: ...
 def camera_project(
     camera_json: str,
     points: list[tuple[float, float, float]],

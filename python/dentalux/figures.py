@@ -82,12 +82,13 @@ class Quality:
     # radii (tenths of a millimetre) left the light under the raised disc and on Fig. 5's
     # walls a few photons per estimate; 2 mm is above the k-th neighbour's distance there
     # (4 mm renders the same) and reads volpath-nee's level under the disc
-    # (docs/figures.md, "The surface map's radius").
+    # (docs/notes/2026-12-06-figures-timing.md, "The surface map's radius").
     surface_radius_mm: float = 2.0
     # Photons per surface-map estimate in the disc scenes (`surface_k`): a quarter of `k`.
     # The map there holds only indirect light; at 128 × 96 and 512 × 384 the smaller kernel
     # halved the bias at the ribbon's edge and cut the time to 2 % per pixel
-    # (docs/bre.md, "512 × 384, measured"; docs/figures.md). None: `k`.
+    # (docs/notes/2026-12-06-bre.md, "512 × 384, measured";
+    # docs/notes/2026-12-06-figures-timing.md). None: `k`.
     surface_k: int | None = None
     # Tissue figures (Fig. 4's enamel, Fig. 5, the crown): anisotropy lowered to this g by the
     # similarity relation (μs' kept), as the paper scaled its teeth's anisotropy; None
@@ -98,15 +99,15 @@ class Quality:
 QUALITIES = {
     # a few minutes for everything on a 2-core machine (what `make demo` runs); the discs store
     # 16 M volume photons with k 200: less colour noise in less time than 4 M with k 800
-    # (benchmarks/chroma_noise.py, docs/figures.md "Photon counts")
+    # (benchmarks/chroma_noise.py, docs/notes/2026-12-06-figures-timing.md, "Photon counts")
     "preview": Quality("preview", (320, 240), 4, 1_000_000, 16_000_000, 0.3, (96, 72), 8192, 200,
                        0.3, 100_000_000, 1.0, 8, teeth_volume_stored=16_000_000,
                        surface_k=50),
     # the paper's 100 M volume photons; 4 M surface photons instead of its 1 M global ones:
     # they are the volume pass's first 4 M photons (it emits about 9 M to store 100 M in the
     # discs), so they cost no tracing, and at k 800 the paper's 1 M left the light under the
-    # raised disc 5 % low at 450 nm, a k-NN blur that 4 M removes (docs/figures.md, "The
-    # surface map's photon count")
+    # raised disc 5 % low at 450 nm, a k-NN blur that 4 M removes
+    # (docs/notes/2026-12-06-figures-timing.md, "The surface map's photon count")
     "paper": Quality("paper", (512, 384), 16, 4_000_000, 100_000_000, 0.15, (192, 144), 16384,
                      800, 0.15, 1_000_000_000, 0.5, 16, teeth_volume_stored=100_000_000,
                      surface_k=200),

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import typer
+from rich import box
 from rich.console import Console
 from rich.table import Table
 
@@ -37,14 +38,36 @@ def list_command(
     if as_json:
         print(json.dumps({"materials": rows}))
         return
-    table = Table(title="materials")
-    for col in ("name", "kind", "λ range [nm]", "points", "description"):
-        table.add_column(col)
+    console = Console()
+    console.print(list_table(rows, console.width))
+
+
+def list_table(rows: list[dict], width: int = 80) -> Table:
+    """The library as one line per name, readable at 80 columns: names are never cut, a
+    default name (``dentin``) says which variant it stands for, and the description is cut
+    to the line (``materials show NAME`` prints it whole, with every value's source; ``--json``
+    also gives the number of known wavelengths)."""
+    table = Table(title="materials", box=box.SIMPLE_HEAD, pad_edge=False, show_edge=False,
+                  caption="whole descriptions and sources: dentalux materials show NAME")
+    cells = []
     for r in rows:
-        shown = r["name"] if r["name"] == r["resolves_to"] else f"{r['name']} → {r['resolves_to']}"
         lo, hi = r["wavelength_nm"]
-        table.add_row(shown, r["kind"], f"{lo:g}–{hi:g}", str(r["points"]), r["description"])
-    Console().print(table)
+        span = f"{lo:g}–{hi:g}" if lo != hi else f"{lo:g}"
+        if r["name"] != r["resolves_to"]:
+            cells.append((r["name"], "default", span, f"= {r['resolves_to']}"))
+        else:
+            cells.append((r["name"], r["kind"], span, r["description"]))
+    # the short columns keep their full width; the description takes the rest of the line
+    heads = ("name", "kind", "nm")
+    widths = [max([len(head), *(len(c[i]) for c in cells)]) for i, head in enumerate(heads)]
+    for head, w in zip(heads, widths, strict=True):
+        table.add_column(head, no_wrap=True, width=w)
+    rest = max(width - sum(widths) - 10, 12)  # 3 separators, 6 cells of padding, 1 spare
+    table.add_column("description", no_wrap=True, width=rest)
+    for c in cells:
+        desc = c[3] if len(c[3]) <= rest else c[3][: rest - 1] + "…"
+        table.add_row(*c[:3], desc)
+    return table
 
 
 @materials_app.command("show")

@@ -8,8 +8,8 @@ the incisal edge. Every part of the dentin field is the outer field plus at leas
 ``root_layer_mm`` > 0, which keeps the dentin strictly inside.
 
 Dimensions: crown width 8.71 mm and crown length 10.23 mm are the clinical-crown means of
-Orozco-Varo et al. 2015 (J Prosthet Dent 113:565; tooth-optics.md §6). Crown thickness
-(labio-lingual, 7.0 mm), cervical width (7.0 mm) and root length (13 mm) are the usual
+Orozco-Varo et al. 2015 (J Prosthet Dent 113:565; docs/explanation/tooth-optics.md §6). Crown
+thickness (labio-lingual, 7.0 mm), cervical width (7.0 mm) and root length (13 mm) are the usual
 textbook values for this tooth (Wheeler's tables as commonly quoted; not checked against a
 stored source). Enamel thickness: not found for incisal/labial enamel of incisors (§6 [NF]);
 chosen to follow the general pattern of §6 (about 0.1 mm at the CEJ, 1-2.5 mm at the edge or

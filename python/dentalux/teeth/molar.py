@@ -9,12 +9,13 @@ trunk. The dentin is the outer field offset by a thickness field: lateral enamel
 cusp tips (``cusp_enamel_mm``) and thinner in the fossae (``fossa_enamel_mm``).
 
 Dimensions: the usual textbook values for this tooth (Wheeler's tables as commonly quoted;
-tooth-optics.md §6 has none for molars and they were not checked against a stored source):
-crown length (CEJ to cusp tip) 7.5 mm, mesio-distal 10.0 mm, bucco-lingual 11.0 mm, cervical
-8.0 x 10.0 mm, buccal roots about 12 mm and the palatal root about 13 mm long. Enamel
-thickness follows tooth-optics.md §6: thickest at cusp tips (2.5-3.0 mm quoted by a popular
-source), about 0.1 mm at the CEJ; molar enamel is thicker than premolar enamel (Stroud et al.
-1998). Not modelled: pulp chamber and canals, the oblique ridge, grooves, the scalloped CEJ.
+docs/explanation/tooth-optics.md §6 has none for molars and they were not checked against a
+stored source): crown length (CEJ to cusp tip) 7.5 mm, mesio-distal 10.0 mm, bucco-lingual 11.0
+mm, cervical 8.0 x 10.0 mm, buccal roots about 12 mm and the palatal root about 13 mm long.
+Enamel thickness follows docs/explanation/tooth-optics.md §6: thickest at cusp tips (2.5-3.0 mm
+quoted by a popular source), about 0.1 mm at the CEJ; molar enamel is thicker than premolar
+enamel (Stroud et al. 1998). Not modelled: pulp chamber and canals, the oblique ridge, grooves,
+the scalloped CEJ.
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ a sample in another medium (n_outside != 1) is refused by the fit (its forward n
 differ from the slab simulator's by up to 0.06 in TR).
 Quadrature: 4 points (iadpython's default) is too coarse for forward-peaked scattering; we
 use 16 points below g = 0.9 and 32 above (24 when n = n_out); 16 -> 32 changes TT/TR by
-< 2e-4 on the tooth-optics.md anchors.
+< 2e-4 on the docs/explanation/tooth-optics.md anchors.
 """
 
 from __future__ import annotations

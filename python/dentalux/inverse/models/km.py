@@ -1,8 +1,8 @@
 """Kubelka-Munk two-flux slab with Saunderson's surface correction.
 
 Mapping from transport coefficients (the common no-absorption-term form, see
-tooth-optics.md 2.3): K = 2 mua, S = (3/4) mus (1 - g) [1/mm]. The interior of the slab of
-thickness X has, with beta = sqrt(K (K + 2 S)),
+docs/explanation/tooth-optics.md 2.3): K = 2 mua, S = (3/4) mus (1 - g) [1/mm]. The interior of the
+slab of thickness X has, with beta = sqrt(K (K + 2 S)),
 
     R_i = S sinh(beta X) / ((S + K) sinh(beta X) + beta cosh(beta X)),
     T_i = beta / ((S + K) sinh(beta X) + beta cosh(beta X)),
