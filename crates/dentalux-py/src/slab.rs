@@ -67,13 +67,7 @@ pub fn slab_simulate<'py>(
         band,
         radial,
         angular_bins,
-        window: window.map(|(a, b, rs, backing, cone)| Window {
-            illuminated_radius: a,
-            viewed_radius: b,
-            specimen_radius: rs,
-            backing,
-            cone: cone.map(|(lo, hi)| (lo.to_radians(), hi.to_radians())),
-        }),
+        window: window.map(window_from),
         backing_orders: None,
     };
     cfg.validate().map_err(runner::to_py_err)?;
@@ -102,6 +96,17 @@ pub fn slab_simulate<'py>(
         out.set_item("window_stderr", win_err)?;
     }
     Ok(out)
+}
+
+/// The core's window from Python's tuple (cone in degrees).
+fn window_from((a, b, rs, backing, cone): WindowTuple) -> Window {
+    Window {
+        illuminated_radius: a,
+        viewed_radius: b,
+        specimen_radius: rs,
+        backing,
+        cone: cone.map(|(lo, hi)| (lo.to_radians(), hi.to_radians())),
+    }
 }
 
 /// Layers of one stack, checked, with `name` prefixing errors.
@@ -149,13 +154,10 @@ pub fn slab_read_bands<'py>(
     }
     let incidence = Incidence::parse(incidence, angle_deg).map_err(runner::to_py_err)?;
     let estimator = Estimator::parse(estimator).map_err(runner::to_py_err)?;
-    let (a, b, rs, _, cone) = window;
+    // the backing is the polynomial's variable: the walk's own is unused
     let window = Window {
-        illuminated_radius: a,
-        viewed_radius: b,
-        specimen_radius: rs,
         backing: 0.0,
-        cone: cone.map(|(lo, hi)| (lo.to_radians(), hi.to_radians())),
+        ..window_from(window)
     };
     let mut cfgs = Vec::with_capacity(bands.len());
     for (k, (layers, key)) in bands.into_iter().zip(band_keys).enumerate() {

@@ -589,6 +589,7 @@ impl<'a> Tracer<'a> {
     /// Tally power `w` leaving at `pos` (|cos θ| = `cos_exit` in the medium outside)
     /// against the window: inside or outside it on the top, inside it on the bottom.
     /// Returns whether `pos` lies inside the window.
+    #[allow(clippy::too_many_arguments)]
     fn exit_window(
         &self,
         win: &Window,
@@ -807,8 +808,6 @@ impl<'a> Tracer<'a> {
         t: &mut Tally,
     ) -> Option<()> {
         let rb = self.backing;
-        let n_below = self.cfg.n_below;
-        let eta = self.layers[self.layers.len() - 1].eta;
         for _ in 0..MAX_BACKING_BOUNCES {
             if *roulette {
                 if rng.uniform() >= rb {
@@ -823,18 +822,29 @@ impl<'a> Tracer<'a> {
                 }
             }
             scattered = true;
-            let up = cosine_hemisphere(rng.uniform2());
-            let (r, cos_t) = reflectance_and_cos_t(up.z, n_below, eta);
-            if r >= 1.0 || (r > 0.0 && rng.uniform() < r) {
-                continue;
+            if let Some(up) = self.reflect_off_backing(rng) {
+                *d = up;
+                return Some(());
             }
-            let k = n_below / eta;
-            *d = Vec3::new(up.x * k, up.y * k, -cos_t);
-            return Some(());
         }
         // a photon that keeps falling back (a near-white backing under total reflection)
         self.exit(pos, *d, *w, true, ph, t);
         None
+    }
+
+    /// A Lambertian reflection off the backing: a cosine-weighted direction up, refracted
+    /// into the bottom layer, or `None` when the Fresnel roulette sends it back down onto
+    /// the backing.
+    fn reflect_off_backing(&self, rng: &mut Stream) -> Option<Vec3> {
+        let n_below = self.cfg.n_below;
+        let eta = self.layers[self.layers.len() - 1].eta;
+        let up = cosine_hemisphere(rng.uniform2());
+        let (r, cos_t) = reflectance_and_cos_t(up.z, n_below, eta);
+        if r >= 1.0 || (r > 0.0 && rng.uniform() < r) {
+            return None;
+        }
+        let k = n_below / eta;
+        Some(Vec3::new(up.x * k, up.y * k, -cos_t))
     }
 
     /// Light reaching the backing at `pos` with backing orders: its arrival inside the window
@@ -854,8 +864,6 @@ impl<'a> Tracer<'a> {
         let (Some(orders), Some(win)) = (&self.orders, &self.cfg.window) else {
             return None;
         };
-        let n_below = self.cfg.n_below;
-        let eta = self.layers[self.layers.len() - 1].eta;
         for _ in 0..MAX_BACKING_BOUNCES {
             self.exit_window(win, pos, d.z, *w, false, ph, t);
             if t.order >= orders.max_order {
@@ -869,14 +877,10 @@ impl<'a> Tracer<'a> {
                 *w /= orders.survival;
             }
             t.order += 1;
-            let up = cosine_hemisphere(rng.uniform2());
-            let (r, cos_t) = reflectance_and_cos_t(up.z, n_below, eta);
-            if r >= 1.0 || (r > 0.0 && rng.uniform() < r) {
-                continue;
+            if let Some(up) = self.reflect_off_backing(rng) {
+                *d = up;
+                return Some(());
             }
-            let k = n_below / eta;
-            *d = Vec3::new(up.x * k, up.y * k, -cos_t);
-            return Some(());
         }
         t.truncated += *w;
         None
