@@ -11,7 +11,6 @@ import json
 
 import numpy as np
 import pytest
-
 from dentalux import dental, instrument, reading
 from dentalux.slab import simulate
 from dentalux.spectra import resolve_bands
