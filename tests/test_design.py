@@ -239,7 +239,8 @@ def test_cli_json_contract_and_plot(mats, tmp_path, capsys):
                   "--photons", "1500", "--designs", "2", "--plot", str(png), "--json"])
     assert code in (0, None)
     out = json.loads(capsys.readouterr().out)
-    assert set(out) == {"target", "designs", "instrument", "seconds"}
+    assert set(out) == {"target", "designs", "instrument", "seconds", "cpu_seconds",
+                        "photons_per_band"}
     assert out["target"]["lab"] == [70.0, 2.0, 15.0]
     assert out["instrument"]["backing_white"] == 0.75  # the zirconia core is the backing
     assert 1 <= len(out["designs"]) <= 2

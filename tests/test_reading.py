@@ -130,3 +130,23 @@ def test_verdict_spans_the_classes_its_error_bar_reaches():
     assert dental.verdict(1.7, 0.5) == "imperceptible or acceptable or unacceptable"
     p = dental.verdict_probabilities(0.79, 0.21)
     assert abs(sum(p.values()) - 1) < 1e-12 and 0.4 < p["imperceptible"] < 0.6
+
+
+def test_shared_walks_match_one_walk_per_band():
+    """Every band from shared walks (a hero band per photon, balance heuristic over the
+    bands' path densities) against one walk per band: band by band within 4 s.e., over a
+    stack whose dentin phase function differs between bands."""
+    inst = instrument.get("contact-probe-3mm")
+    bands = [420.0, 480.0, 540.0, 600.0, 660.0]
+    wl = resolve_bands(bands)
+    mats = [(dental._resolve_material(m), t) for m, t in STACK]
+    band_stacks = reading.stacks(mats, wl)
+    assert len({layer.g for stack in band_stacks for layer in stack[1:]}) > 1
+    rb = (np.zeros(len(wl)), np.full(len(wl), 0.9))
+    shared = reading.measure(band_stacks, wl, inst, *rb, 8_000, seed=4, walks="shared")
+    alone = reading.measure(band_stacks, wl, inst, *rb, 8_000, seed=5)
+    z = (shared.values - alone.values) / np.hypot(shared.stderr, alone.stderr)
+    assert np.all(np.abs(z) < 4), z
+    assert shared.method == "shared-walks" and 0 < shared.extra["concentration"] < 1
+    with pytest.raises(ValueError, match="walks"):
+        reading.measure(band_stacks, wl, inst, *rb, 100, seed=1, walks="hero")

@@ -72,6 +72,8 @@ def _expected_cells(shade_json: dict) -> dict[str, tuple[object, str]]:
     cells = {}
     for key, value in report._leaves(shade_json):
         top = key.split(".", 1)[0]
+        if top in report.SPECTRUM_KEYS or top in report.RUN_COST_KEYS:
+            continue  # spectra are charted; a run's cost differs between runs
         if isinstance(value, float) and top in report.DIGITS:
             text = f"{value:.{report.DIGITS[top]}f}"
         elif isinstance(value, float):

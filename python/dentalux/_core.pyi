@@ -56,6 +56,21 @@ def slab_read_bands(
     threads: int | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> dict[str, Any]: ...
+def slab_read_spectral(
+    bands: list[list[LayerTuple]],
+    n_photons: int,
+    seed: int,
+    key: int,
+    window: WindowTuple,
+    max_order: int,
+    survival: float,
+    n_above: float = 1.0,
+    n_below: float = 1.0,
+    incidence: str = "normal",
+    angle_deg: float = 0.0,
+    threads: int | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> dict[str, Any]: ...
 def phase_sample_cos(
     n: int, g: float, fd: float = 0.0, lobes: list[tuple[float, float]] | None = None, seed: int = 0
 ) -> list[float]: ...

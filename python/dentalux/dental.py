@@ -190,7 +190,8 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
          contact: float | None = None, photons: int = DEFAULT_PHOTONS, seed: int = 1,
          estimator: str = "weighted", illuminant: str = "D65", observer: str = "2",
          op_backing: str = "black", reconstruction: str = "hold", threads: int | None = None,
-         progress: bool | None = False, precision: float | None = None) -> DentalMetrics:
+         progress: bool | None = False, precision: float | None = None,
+         walks: str = "per-band") -> DentalMetrics:
     """Colour metrics of a layered specimen as ``instrument`` reads it (see module doc).
 
     ``specimen``: a list of (material, thickness [mm]) from top to bottom; a material is a
@@ -199,12 +200,15 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     ``infinite`` geometry). ``backing_black``, ``backing_white``, ``contact`` override the
     instrument's (None keeps them). ``photons`` per band and run; ``precision`` (a target
     standard error in ΔE00 units, :func:`photons_for_precision`) chooses them instead.
+    ``walks``: 'per-band' (one walk per band) or 'shared' (every band of an instrument
+    window from shared walks with a hero band per photon; :mod:`dentalux.reading.engine`).
     """
     if precision is not None:
         kw = dict(bands=bands, instrument=instrument, backing_black=backing_black,
                   backing_white=backing_white, contact=contact, seed=seed,
                   estimator=estimator, illuminant=illuminant, observer=observer,
-                  op_backing=op_backing, reconstruction=reconstruction, threads=threads)
+                  op_backing=op_backing, reconstruction=reconstruction, threads=threads,
+                  walks=walks)
         photons, plan = photons_for_precision(specimen, precision, **kw)
         m = read(specimen, photons=photons, progress=progress, **kw)
         m.precision = {**plan, "achieved": reading_precision(m)}
@@ -240,7 +244,7 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     cs = system(illuminant, str(observer))
     rec = Reconstruction(wl, grid=cs.wavelengths, basis=reconstruction)
     spectra = reading.measure(reading.stacks(parts, wl), wl, inst, rb_black, rb_white,
-                              photons, seed, estimator, threads, progress)
+                              photons, seed, estimator, threads, progress, walks)
     out, errs = spectra.propagate(lambda b: colour_of(b, cs, rec, op_backing))
     stderr = {k: float(errs[k]) for k in ("tp", "tp00", "cr", "op")}
     for key in ("lab_black", "lab_white", "lab_transmitted"):

@@ -40,6 +40,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     )?;
     m.add_function(wrap_pyfunction!(slab::slab_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(slab::slab_read_bands, m)?)?;
+    m.add_function(wrap_pyfunction!(slab::slab_read_spectral, m)?)?;
     m.add_function(wrap_pyfunction!(slab::phase_sample_cos, m)?)?;
     m.add_function(wrap_pyfunction!(slab::phase_eval, m)?)?;
     m.add_function(wrap_pyfunction!(physics::fresnel_reflectance, m)?)?;

@@ -5,6 +5,7 @@ use dentalux_core::instrument::{Window, WINDOW_KEYS};
 use dentalux_core::integrators::slab::{
     simulate, simulate_all, BackingOrders, Estimator, Incidence, SlabConfig, SlabLayer, SCALAR_KEYS,
 };
+use dentalux_core::integrators::slab_spectral::{simulate_spectral, SpectralConfig};
 use dentalux_core::medium::Medium;
 use dentalux_core::phase::PhaseFunction;
 use dentalux_core::rng::Stream;
@@ -198,6 +199,72 @@ pub fn slab_read_bands<'py>(
         results.iter().map(|r| r.truncated).collect::<Vec<_>>(),
     )?;
     out.set_item("window_keys", WINDOW_KEYS.to_vec())?;
+    Ok(out)
+}
+
+/// Read a specimen through an instrument window in every band from shared walks (a hero
+/// band per photon, `dentalux.reading`): one stack per band, the same thicknesses and
+/// indices in all. Returns `order_sums` as an array (replicates, bands, orders + 1, window
+/// keys), `replicate_photons`, `truncated` (per band) and `concentration`.
+#[pyfunction]
+#[pyo3(signature = (bands, n_photons, seed, key, window, max_order, survival, n_above=1.0,
+    n_below=1.0, incidence="normal", angle_deg=0.0, threads=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn slab_read_spectral<'py>(
+    py: Python<'py>,
+    bands: Vec<Vec<LayerTuple>>,
+    n_photons: u64,
+    seed: u64,
+    key: u64,
+    window: WindowTuple,
+    max_order: usize,
+    survival: f64,
+    n_above: f64,
+    n_below: f64,
+    incidence: &str,
+    angle_deg: f64,
+    threads: Option<usize>,
+    progress: Option<PyObject>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let incidence = Incidence::parse(incidence, angle_deg).map_err(runner::to_py_err)?;
+    let n_bands = bands.len();
+    let mut stacks = Vec::with_capacity(n_bands);
+    for (k, layers) in bands.into_iter().enumerate() {
+        stacks.push(stack_from(layers, &format!("bands[{k}]."))?);
+    }
+    let cfg = SpectralConfig {
+        bands: stacks,
+        n_above,
+        n_below,
+        incidence,
+        n_photons,
+        seed,
+        key,
+        window: Window {
+            backing: 0.0,
+            ..window_from(window)
+        },
+        orders: BackingOrders {
+            max_order,
+            survival,
+        },
+    };
+    cfg.validate().map_err(runner::to_py_err)?;
+    let res = runner::run(py, threads, progress, |c| simulate_spectral(&cfg, c))?;
+    let shape = [
+        res.replicate_photons.len(),
+        n_bands,
+        max_order + 1,
+        WINDOW_KEYS.len(),
+    ];
+    let out = PyDict::new(py);
+    out.set_item(
+        "order_sums",
+        PyArray1::from_vec(py, res.sums).reshape(shape)?,
+    )?;
+    out.set_item("replicate_photons", res.replicate_photons)?;
+    out.set_item("truncated", res.truncated)?;
+    out.set_item("concentration", res.concentration)?;
     Ok(out)
 }
 

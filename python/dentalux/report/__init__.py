@@ -38,6 +38,11 @@ SCALAR_ROWS = (("tp", "TP (ΔE*ab, black against white)"),
 COMPARE_KEYS = ("delta_e00", "delta_tp00", "verdict")
 COMPARE_SHOWN = COMPARE_KEYS + ("delta_e00_stderr",)
 SECTION_KEYS = ("instrument", "edge_loss", "shade_match")
+#: shade JSON keys not shown as cells: the spectra (drawn in the charts instead)
+SPECTRUM_KEYS = ("wavelength_nm", "reflectance_black", "reflectance_white",
+                 "reflectance_black_stderr", "reflectance_white_stderr")
+#: shade JSON keys that describe a run's cost: two runs of the same seed differ in them
+RUN_COST_KEYS = ("cpu_seconds",)
 #: thickness factors of the TP-vs-thickness chart when none are given (times --thickness)
 TP_FACTORS = (0.25, 0.5, 1.0, 1.5, 2.0)
 FIGURE_SUFFIXES = {".png": (b"\x89PNG\r\n\x1a\n", "image/png"),
@@ -204,7 +209,8 @@ def _page(spec: str, name: str, out: dict) -> dict:
     return {"spec": spec, "name": name, "lab": lab, "scalars": scalars, "compare": compare,
             "sections": [{"key": k, "rows": _generic_rows(out[k], k)}
                          for k in SECTION_KEYS if k in out],
-            "other": [r for k in out if k not in shown for r in _generic_rows(out[k], k)],
+            "other": [r for k in out if k not in shown and k not in SPECTRUM_KEYS
+                      for r in _generic_rows(out[k], k)],
             "json_text": json.dumps(out, indent=1)}
 
 

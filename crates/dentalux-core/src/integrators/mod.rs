@@ -1,7 +1,8 @@
 //! Integrators: each one a way of turning photons or rays into a measured quantity.
 //!
 //! - [`slab`]: layered slab lit by a beam or diffuse light; what a spectrophotometer with
-//!   an integrating sphere measures (total transmittance, reflectance, absorption).
+//!   an integrating sphere measures (total transmittance, reflectance, absorption);
+//!   [`slab_spectral`] reads every band of an instrument window from shared walks.
 //! - [`photon_trace`]: the photon pass (eqs. 1–10) filling volume and surface photon maps,
 //!   its energy [`ledger`]; [`aim`] sends part of the volume pass straight at the media;
 //!   [`hero`] weighs a spectral pass's walks between its bands.
@@ -35,6 +36,7 @@ pub mod ppm;
 pub mod render;
 pub mod settings;
 pub mod slab;
+pub mod slab_spectral;
 pub mod tiles;
 pub mod transport;
 pub mod volpath;
