@@ -200,6 +200,8 @@ def parse_csv(lines: list[tuple[int, str]], where: str) -> tuple[list[str], list
 
 
 def _range_text(lo, hi, lo_open, hi_open, unit) -> str:
+    if lo is None and hi is None:
+        return "a finite number" + (f" [{unit}]" if unit else "")
     left = "(" if lo_open or lo is None else "["
     right = ")" if hi_open or hi is None else "]"
     lo_t = "-inf" if lo is None else f"{lo:g}"
