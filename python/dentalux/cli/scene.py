@@ -27,10 +27,14 @@ def check_command(
         help="let the scene read files outside its folder"),
 ) -> None:
     """Validate SCENE_FILE (exit code 2 with the key path on error) and summarise it."""
+    from dentalux.render import plan
+
     scene = load_scene(scene_file, allow_outside_paths=allow_outside_paths)
+    # the checks `dentalux render` makes before it starts (bands, settings, ceilings,
+    # memory): check never calls valid what render refuses
+    band_list = plan(scene, bands=parse_bands(bands))["bands"]
     summary = dict(scene.summary(), files_read=scene.files_read())
     if dump:
-        band_list = parse_bands(bands) or scene.bands
         print(dumps_checked({
             "summary": summary,
             "scene": scene.description,
