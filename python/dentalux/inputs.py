@@ -230,7 +230,9 @@ def integer(value, key: str, lo: int | None = None, hi: int | None = None,
             unit: str = "") -> int:
     """``value`` as an int inside [lo, hi]: a bool, a string or a float that is not a whole
     number is refused (never truncated)."""
-    allowed = _range_text(lo, hi, False, False, unit)
+    lo_t = "-inf" if lo is None else f"{lo:,}"
+    hi_t = "inf" if hi is None else f"{hi:,}"
+    allowed = f"{lo_t} ... {hi_t}" + (f" {unit}" if unit else "")
     if isinstance(value, bool) or not isinstance(value, Real):
         raise ValueError(f"{key} = {value!r}: must be an integer (not "
                          f"{type(value).__name__}): allowed {allowed}")
