@@ -43,6 +43,12 @@ KINDS = ("measured", "transcribed", "derived", "fitted")
 VALUE_KINDS = KINDS + ("assumed", "borrowed")
 """Allowed first word of a per-value provenance string (``"transcribed: ..."``)."""
 
+#: the largest absorption or scattering coefficient [1/mm]: a mean free path of 1 nm, far
+#: beyond any dental material (enamel and dentin: 1e-3 ... 1e2); 1e300 read "cr": null
+MAX_COEFFICIENT = 1e6
+#: the largest refractive index (dental materials 1.3-2.2; nothing optical exceeds about 4)
+MAX_INDEX = 10.0
+
 DATA_DIR = Path(__file__).parent / "data"
 """Directory whose ``*.toml`` files with ``[materials.*]`` tables form the library."""
 
@@ -274,12 +280,13 @@ def _validate(m: Material) -> None:
         raise ValueError(f"{where}: wavelength_nm must be a non-empty list [nm]")
     if not np.all(np.isfinite(lam)) or np.any(lam <= 0) or np.any(np.diff(lam) <= 0):
         raise ValueError(f"{where}: wavelength_nm must be positive and strictly increasing [nm]")
+    hi, n_hi = MAX_COEFFICIENT, MAX_INDEX
     ranges = {
-        "mua": ("[0, inf) [1/mm]", lambda v: v >= 0),
-        "mus": ("[0, inf) [1/mm]", lambda v: v >= 0),
+        "mua": (f"[0, {hi:g}] [1/mm]", lambda v: (v >= 0) & (v <= hi)),
+        "mus": (f"[0, {hi:g}] [1/mm]", lambda v: (v >= 0) & (v <= hi)),
         "g": ("(-1, 1)", lambda v: (v > -1) & (v < 1)),
         "fd": ("[0, 1]", lambda v: (v >= 0) & (v <= 1)),
-        "n": ("[1, inf)", lambda v: v >= 1),
+        "n": (f"[1, {n_hi:g}]", lambda v: (v >= 1) & (v <= n_hi)),
     }
     for q, (allowed, ok) in ranges.items():
         v = getattr(m, q)
