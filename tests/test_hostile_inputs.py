@@ -420,3 +420,63 @@ def test_ceilings_are_documented():
                  "MAX_FIGURE_BYTES"):
         assert name in text, name
     assert limits.MAX_READING_BANDS == 4_001
+
+
+# ---------------------------------------------------------------------------------------
+# names and paths that mean one thing
+
+
+def test_a_stack_target_takes_a_material_file_path(tmp_path):
+    from dentalux.design.targets import parse_stack
+
+    path = tmp_path / "lab" / "my.toml"
+    assert parse_stack(f"{path}:0.5/dentin:2") == [(str(path), 0.5), ("dentin", 2.0)]
+    assert parse_stack("enamel:1.0/dentin:2.5") == [("enamel", 1.0), ("dentin", 2.5)]
+    with pytest.raises(ValueError, match="MATERIAL:MM"):
+        parse_stack("enamel:x")
+
+
+@FAST
+@given(st.sampled_from([True, False, 1.5, "1"]))
+def test_mesh_indices_refuse_booleans_and_non_integers(index):
+    from dentalux.scene.load import read_toml, scene_from_dict
+
+    d = read_toml(CORNELL)
+    shape = {k: v for k, v in d["shapes"][0].items() if k not in ("corner", "u", "v")}
+    shape.update(type="mesh", name="m", positions=[[0, 0, 0], [1, 0, 0], [0, 1, 0]],
+                 triangles=[[0, 2, index]])
+    d["shapes"].append(shape)
+    with pytest.raises(ValueError, match=r"triangles\[0\]\[2\]"):
+        scene_from_dict(d)
+
+
+def test_scene_file_bom_is_tolerated_and_latin1_named(tmp_path, capsys):
+    bom = tmp_path / "bom.toml"
+    bom.write_bytes(b"\xef\xbb\xbf" + CORNELL.read_bytes())
+    code, out, _ = run(capsys, ["scene", "check", bom, "--json"])
+    assert code in (0, None) and strict_loads(out)["name"] == "cornell"
+    latin = tmp_path / "latin.toml"
+    latin.write_bytes(CORNELL.read_bytes().replace(b'"cornell"', b'"caf\xe9"', 1))
+    code, _, err = run(capsys, ["scene", "check", latin])
+    assert code == 2 and "latin.toml" in err and "not UTF-8" in err, err
+
+
+def test_json_files_in_outputs_name_the_files_where_they_finally_are(tmp_path):
+    from dentalux.output_paths import staged_dir
+
+    out = tmp_path / "out"
+    with staged_dir(out, "--out") as stage:
+        (stage / "image.png").write_bytes(b"x")
+        (stage / "colour.json").write_text(json.dumps(
+            {"files": {"png": str(stage / "image.png")}}, indent=2))
+    files = json.loads((out / "colour.json").read_text())["files"]
+    assert files == {"png": str(out / "image.png")} and Path(files["png"]).is_file()
+
+
+def test_an_output_name_that_is_not_utf8_is_refused_before_writing(tmp_path, capsys):
+    import os
+
+    out = os.fsdecode(os.fsencode(str(tmp_path)) + b"/r\xe9")
+    code, _, err = run(capsys, ["tooth", "incisor", "--resolution", "0.4", "--out", out])
+    assert code == 2 and "not a UTF-8 name" in err, err
+    assert list(tmp_path.iterdir()) == []

@@ -53,18 +53,19 @@ _BOM = b"\xef\xbb\xbf"
 # --- text ---------------------------------------------------------------------------------
 
 
-def read_text(path, what: str = "file") -> str:
+def read_text(path, what: str = "file", max_bytes: int = MAX_TEXT_BYTES) -> str:
     """The text of ``path`` as UTF-8 (a BOM dropped); ``what`` names the kind of file
-    ('instrument file', 'measurement table') in errors."""
+    ('instrument file', 'measurement table') in errors; larger than ``max_bytes`` is
+    refused before it is read."""
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"{what} {str(p)!r} not found")
     if not p.is_file():
         raise ValueError(f"{what} {str(p)!r}: not a regular file")
     size = p.stat().st_size
-    if size > MAX_TEXT_BYTES:
+    if size > max_bytes:
         raise ValueError(f"{what} {p}: {size:,} bytes is too large: allowed at most "
-                         f"{MAX_TEXT_BYTES:,} bytes")
+                         f"{max_bytes:,} bytes")
     data = p.read_bytes()
     return decode(data, f"{what} {p}")
 
