@@ -480,3 +480,13 @@ def test_an_output_name_that_is_not_utf8_is_refused_before_writing(tmp_path, cap
     code, _, err = run(capsys, ["tooth", "incisor", "--resolution", "0.4", "--out", out])
     assert code == 2 and "not a UTF-8 name" in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+@FAST
+@given(st.sampled_from([math.nan, math.inf, -550.0, 1e300, True, "550"]))
+def test_fit_records_only_a_real_wavelength(wl):
+    from dentalux.inverse import fit
+
+    with pytest.raises(ValueError, match=r"^wavelength_nm = "):
+        fit(tt=0.4897, tr=0.3016, n=1.55, g=0.75, thickness=0.5, model="km",
+            wavelength_nm=wl)
