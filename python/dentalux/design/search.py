@@ -243,6 +243,9 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
         photons, plan = dental.photons_for_precision(
             middle + tail, precision, seed=seed, instrument=inst, **common)
         verify_photons = photons
+        # the fast model's photons again, now that the precision has chosen them
+        limits.check_design_work(nodes or DEFAULT_NODES[len(spec)], len(spec), len(wl),
+                                 photons, 2 if target_tp is not None else 1)
 
     tgt = targets.parse(target, target_tp, read=read_stack)
     tp = tgt.tp00 is not None
