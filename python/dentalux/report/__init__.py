@@ -59,9 +59,14 @@ def shade_json(material, thickness: float, against=None, instrument=None, match=
 
     ``kw``: the keyword arguments of :func:`dentalux.dental.read` (bands, backings, contact,
     photons, seed, estimator, observer, illuminant, threads)."""
+    from dentalux.strict_json import check_finite
+
     kw.setdefault("progress", False)
-    return dental.shade(material, thickness, against=against, instrument=instrument,
-                        match=match, **kw)
+    out = dental.shade(material, thickness, against=against, instrument=instrument,
+                       match=match, **kw)
+    # as `dentalux shade`: a NaN or inf reading is an error, never a number in the report
+    check_finite(out, f"report: {material} at {thickness:g} mm")
+    return out
 
 
 def _leaves(obj, prefix: str = "") -> list[tuple[str, object]]:
