@@ -397,6 +397,7 @@ def test_an_absurd_material_is_an_error_not_null(tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["shade", "enamel", "--bands", "full:0.0001"], "4,000,001 bands"),
+    (["shade", "enamel", "--photons", "10000000000"], "about 11.4 h"),
     (["design", "--target", "lab:70,0,15", "--layer", "enamel:0.3-1.0", "--nodes", "100000"],
      "nodes = 100000"),
     (["tooth", "molar", "--resolution", "0.049", "--out", "{tmp}/t"], "about"),

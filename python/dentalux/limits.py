@@ -55,6 +55,9 @@ MAX_DESIGN_NODES = 64
 #: photons one ``design`` search may trace for its fast model (nodes^layers x bands x runs x
 #: photons): about 3 hours at PHOTON_RATE
 MAX_DESIGN_PHOTONS = 100_000_000_000
+#: photons one reading (``shade``, ``report``, ``dental.read``) may trace over all its bands
+#: (photons x bands): about 3 hours at PHOTON_RATE
+MAX_READING_PHOTONS = 100_000_000_000
 #: photons per second assumed for the estimates in refusals (a 2-core machine, slab walk)
 PHOTON_RATE = 10_000_000
 #: grid nodes of a procedural tooth (``tooth --resolution``): the signed-distance fields and
@@ -391,7 +394,8 @@ def check_band_count(n: int, name: str = "--bands") -> None:
                          "or three Monte Carlo runs")
 
 
-def check_reading_args(photons, seed=None, reconstruction=None, threads=None) -> int:
+def check_reading_args(photons, seed=None, reconstruction=None, threads=None,
+                       bands=None) -> int:
     """The counts and names of a reading's Python API (dentalux.dental.read, design):
     ``photons`` an integer 1 ... MAX_SLAB_PHOTONS (``True`` and 500.7 refused, never read as
     1 or truncated), ``seed`` an integer, ``reconstruction`` one of spectra.BASES (named as
@@ -406,6 +410,15 @@ def check_reading_args(photons, seed=None, reconstruction=None, threads=None) ->
                          f"{', '.join(spectra.BASES)}")
     if threads is not None:
         inputs.integer(threads, "threads", 1, max_threads())
+    if bands is not None:  # the whole reading: one walk of `photons` per band at least
+        nb = len(spectra.resolve_bands(bands))
+        total = float(n) * nb
+        if total > MAX_READING_PHOTONS:
+            raise ValueError(
+                f"photons = {n:,} per band x {nb} band(s): the reading would trace at least "
+                f"{total:.3g} photons, about {format_seconds(total / PHOTON_RATE)} at "
+                f"{PHOTON_RATE / 1e6:g} M photons/s: allowed at most "
+                f"{MAX_READING_PHOTONS:.3g}; give fewer photons or bands")
     return n
 
 
