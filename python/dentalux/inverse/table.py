@@ -64,7 +64,11 @@ def read_table(source) -> list[dict[str, float]]:
                              f"(required: {','.join(REQUIRED)}; optional: {','.join(OPTIONAL)})")
         rec = {}
         for key in REQUIRED + OPTIONAL:
-            if key not in row or row[key] in ("", None):
+            empty = key not in row or row[key] is None or (
+                isinstance(row[key], str) and not row[key].strip())
+            if empty and key in REQUIRED:  # was a bare KeyError: "error: thickness_mm"
+                raise ValueError(f"table {origin!r} {at}: {key} is empty: needs a number")
+            if empty:
                 continue
             value = row[key]
             if isinstance(value, bool):
