@@ -95,7 +95,8 @@ INSTRUMENT_MUTATIONS = st.one_of(
 
 @FAST
 @given(INSTRUMENT_MUTATIONS)
-def test_instrument_file_refuses_malformed_values_naming_file_and_key(tmp_path, mutation):
+def test_instrument_file_refuses_malformed_values_naming_file_and_key(tmp_path, capsys,
+                                                                      mutation):
     key, value = mutation
     table = _instrument()
     if key.startswith("backing_white."):
@@ -109,6 +110,8 @@ def test_instrument_file_refuses_malformed_values_naming_file_and_key(tmp_path, 
     msg = str(exc.value)
     assert "lab-probe.toml" in msg, msg
     assert key.split(".")[-1] in msg or (key == "bogus" and "bogus" in msg), msg
+    code, out, err = run(capsys, ["instruments", "show", path, "--json"])
+    assert code == 2 and out == "" and err == f"error: {msg}\n", err
 
 
 def test_instrument_spectral_backing_rules_and_a_good_table_still_reads(tmp_path):
@@ -167,7 +170,8 @@ MATERIAL_MUTATIONS = st.one_of(
 
 @FAST
 @given(MATERIAL_MUTATIONS)
-def test_material_file_refuses_malformed_values_naming_file_and_key(tmp_path, mutation):
+def test_material_file_refuses_malformed_values_naming_file_and_key(tmp_path, capsys,
+                                                                    mutation):
     key, value = mutation
     m = _material(**{key: value})
     path = tmp_path / "my-composite.toml"
@@ -176,6 +180,8 @@ def test_material_file_refuses_malformed_values_naming_file_and_key(tmp_path, mu
         materials.get(str(path))
     msg = str(exc.value)
     assert "my-composite.toml" in msg and key in msg, msg
+    code, out, err = run(capsys, ["materials", "show", path, "--json"])
+    assert code == 2 and out == "" and err == f"error: {msg}\n", err
 
 
 def test_material_file_deep_or_foreign_encoding_is_a_named_error(tmp_path, capsys):
@@ -209,7 +215,8 @@ CSV_MUTATIONS = st.one_of(
 
 @FAST
 @given(CSV_MUTATIONS)
-def test_measurement_table_refuses_malformed_rows_naming_file_and_column(tmp_path, mutation):
+def test_measurement_table_refuses_malformed_rows_naming_file_and_column(tmp_path, capsys,
+                                                                          mutation):
     row, named = mutation
     path = tmp_path / "discs.csv"
     path.write_text(f"{HEADER}\n{ROW}\n{row}\n", encoding="utf-8")
@@ -217,6 +224,8 @@ def test_measurement_table_refuses_malformed_rows_naming_file_and_column(tmp_pat
         read_table(str(path))
     msg = str(exc.value)
     assert "discs.csv" in msg and named in msg, msg
+    code, out, err = run(capsys, ["fit", "--table", path, "--model", "km", "--json"])
+    assert code == 2 and out == "" and err == f"error: {msg}\n", err
 
 
 @FAST
