@@ -308,9 +308,12 @@ def test_render_folder_without_image_blames_render_not_figure(tmp_path):
 
 
 @FAST
-@given(st.sampled_from(["photons", "seed", "threads"]),
-       st.sampled_from([True, 500.7, "500", math.nan, -1, 2**70]))
-def test_api_counts_are_strict_integers_named_as_the_argument(name, value):
+@given(st.one_of(
+    st.tuples(st.sampled_from(["photons", "seed", "threads"]),
+              st.sampled_from([True, 500.7, "500", math.nan, -1, 2**70])),
+    st.tuples(st.sampled_from(["contact"]), st.sampled_from(["x", True, 0.5, math.inf, 1e300]))))
+def test_api_counts_are_strict_integers_named_as_the_argument(case):
+    name, value = case
     args = {"photons": 1000, name: value}
     t0 = time.perf_counter()
     with pytest.raises(ValueError, match=rf"^{name} = "):

@@ -200,7 +200,7 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     instrument's (None keeps them). ``photons`` per band and run; ``precision`` (a target
     standard error in ΔE00 units, :func:`photons_for_precision`) chooses them instead.
     """
-    limits.check_reading_args(photons, seed, reconstruction, threads, bands)  # no True, 500.7
+    limits.check_reading_args(photons, seed, reconstruction, threads, bands, contact)
     if precision is not None:
         kw = dict(bands=bands, instrument=instrument, backing_black=backing_black,
                   backing_white=backing_white, contact=contact, seed=seed,

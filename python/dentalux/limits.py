@@ -395,7 +395,7 @@ def check_band_count(n: int, name: str = "--bands") -> None:
 
 
 def check_reading_args(photons, seed=None, reconstruction=None, threads=None,
-                       bands=None) -> int:
+                       bands=None, contact=None) -> int:
     """The counts and names of a reading's Python API (dentalux.dental.read, design):
     ``photons`` an integer 1 ... MAX_SLAB_PHOTONS (``True`` and 500.7 refused, never read as
     1 or truncated), ``seed`` an integer, ``reconstruction`` one of spectra.BASES (named as
@@ -410,6 +410,10 @@ def check_reading_args(photons, seed=None, reconstruction=None, threads=None,
                          f"{', '.join(spectra.BASES)}")
     if threads is not None:
         inputs.integer(threads, "threads", 1, max_threads())
+    if contact is not None:  # a coupling fluid's index, as an instrument file's contact_index
+        from dentalux.instrument import CONTACT_INDEX_MAX
+
+        inputs.number(contact, "contact", 1.0, CONTACT_INDEX_MAX)
     if bands is not None:  # the whole reading: one walk of `photons` per band at least
         nb = len(spectra.resolve_bands(bands))
         total = float(n) * nb
