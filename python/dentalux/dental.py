@@ -203,6 +203,7 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     ``walks``: 'per-band' (one walk per band) or 'shared' (every band of an instrument
     window from shared walks with a hero band per photon; :mod:`dentalux.reading.engine`).
     """
+    limits.check_reading_args(photons, seed, reconstruction, threads, bands, contact)
     if precision is not None:
         kw = dict(bands=bands, instrument=instrument, backing_black=backing_black,
                   backing_white=backing_white, contact=contact, seed=seed,

@@ -458,7 +458,9 @@ def make_figures(out_dir, quality: str | Quality = "preview", only=None, log=pri
         q = QUALITIES[quality]
     else:
         raise ValueError(f"quality = {quality!r}: allowed {', '.join(QUALITIES)}")
-    todo = list(FIGURES if not only else only)
+    if only is not None and not list(only):
+        raise ValueError("only = []: names no figure (None renders all of them)")
+    todo = list(FIGURES if only is None else only)
     for f in todo:
         if f not in FIGURES:
             raise ValueError(f"figure {f!r}: allowed {', '.join(FIGURES)}")

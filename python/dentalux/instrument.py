@@ -31,12 +31,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from numbers import Real
 from pathlib import Path
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
+from dentalux import inputs
 
 DATA = Path(__file__).parent / "data" / "instruments.toml"
 INFINITE = "infinite"
@@ -44,6 +42,12 @@ INFINITE = "infinite"
 DEFAULT = "contact-probe-3mm"
 # half-width of the 45 deg ring [deg]: CIE 15 keeps every ray within 8 deg of its beam axis
 RING_HALF_WIDTH = 8.0
+#: diameters an instrument may name [mm]: squares and overlap areas of discs stay well inside
+#: float range (a 1e-300 mm spot squares to 0 and reads 0/0); ``infinite`` alone has inf
+DIAMETER_RANGE_MM = (1e-9, 1e9)
+#: the largest refractive index of a coupling fluid (glycerin 1.47, immersion oils 1.52;
+#: nothing a lab couples with exceeds 3)
+CONTACT_INDEX_MAX = 3.0
 
 
 @dataclass(frozen=True)
@@ -73,36 +77,41 @@ KEYS = ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm", "backing_bl
 
 def _number(name: str, value, lo: float, lo_open: bool, hi: float = math.inf,
             allow_inf: bool = False) -> float:
-    """``value`` as a float inside [lo, hi] (lo open where asked), or a ValueError naming it."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} = {value!r}: must be a number") from None
-    if isinstance(value, bool) or math.isnan(x) or (math.isinf(x) and not allow_inf):
-        raise ValueError(f"{name} = {value!r}: must be a finite number")
-    if (x <= lo if lo_open else x < lo) or x > hi:
-        left = "(" if lo_open else "["
-        right = "inf)" if math.isinf(hi) else f"{hi:g}]"
-        raise ValueError(f"{name} = {value!r} is out of range: allowed {left}{lo:g}, {right}")
-    return x
+    """``value`` as a float inside [lo, hi] (lo open where asked), or a ValueError naming it:
+    strictly a number (no bool, no string: ``"4.0"`` is refused, not compared as text)."""
+    if allow_inf and isinstance(value, Real) and not isinstance(value, bool) \
+            and math.isinf(float(value)) and float(value) > 0:
+        return math.inf
+    return inputs.number(value, name, lo, None if math.isinf(hi) else hi, lo_open=lo_open)
+
+
+def _diameter(name: str, value, allow_inf: bool = False) -> float:
+    """A diameter [mm] inside DIAMETER_RANGE_MM (inf only for the infinite geometry)."""
+    lo, hi = DIAMETER_RANGE_MM
+    if allow_inf and isinstance(value, Real) and not isinstance(value, bool) \
+            and math.isinf(float(value)) and float(value) > 0:
+        return math.inf
+    return inputs.number(value, name, lo, hi, unit="mm")
 
 
 def _backing(name: str, value):
     """A backing reflectance: a number in [0, 1], {wavelength_nm = [...], reflectance = [...]}
-    or the (wavelengths, reflectances) pair this returns for such a table."""
+    or the (wavelengths, reflectances) pair this returns for such a table. A table's
+    wavelengths are strictly increasing (sorted, each once) and finite, inside
+    dentalux.inputs.WAVELENGTH_RANGE_NM; no other key is allowed."""
     if isinstance(value, tuple) and len(value) == 2:
         value = {"wavelength_nm": value[0], "reflectance": value[1]}
     if isinstance(value, dict):
-        try:
-            wl = [float(x) for x in value["wavelength_nm"]]
-            r = [float(x) for x in value["reflectance"]]
-        except (KeyError, TypeError, ValueError):
-            raise ValueError(f"{name}: a spectrum needs wavelength_nm = [...] and "
-                             "reflectance = [...] of numbers") from None
-        if len(wl) != len(r) or len(wl) < 1:
-            raise ValueError(f"{name}: wavelength_nm and reflectance must have the same length")
-        if any(not (0.0 <= x <= 1.0) for x in r):
-            raise ValueError(f"{name}: reflectance must lie in [0, 1]")
+        inputs.known_keys(value, ("wavelength_nm", "reflectance"), name)
+        for key in ("wavelength_nm", "reflectance"):
+            if key not in value:
+                raise ValueError(f"{name}: a spectrum needs wavelength_nm = [...] and "
+                                 f"reflectance = [...] of numbers (missing {key})")
+        wl = inputs.wavelengths(value["wavelength_nm"], f"{name}.wavelength_nm")
+        r = inputs.numbers(value["reflectance"], f"{name}.reflectance", 0.0, 1.0)
+        if len(wl) != len(r):
+            raise ValueError(f"{name}: wavelength_nm has {len(wl)} values and reflectance "
+                             f"{len(r)}: they must have the same length")
         return (tuple(wl), tuple(r))
     return _number(name, value, 0.0, False, 1.0)
 
@@ -123,34 +132,49 @@ class Instrument:
     provenance: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self):
-        if self.geometry not in GEOMETRIES:
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"name = {self.name!r}: must be a non-empty string")
+        if not isinstance(self.geometry, str) or self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry = {self.geometry!r}: allowed {', '.join(GEOMETRIES)}")
-        infinite = self.is_infinite
-        ill = _number("illuminated_diameter_mm", self.illuminated_diameter_mm, 0.0, True,
-                      allow_inf=infinite)
-        view = _number("viewed_diameter_mm", self.viewed_diameter_mm, 0.0, True,
-                       allow_inf=infinite)
+        # only the built-in idealisation may have infinite areas (see is_infinite)
+        infinite = self.name == INFINITE and self.geometry == "0-d"
+        ill = _diameter("illuminated_diameter_mm", self.illuminated_diameter_mm, infinite)
+        view = _diameter("viewed_diameter_mm", self.viewed_diameter_mm, infinite)
+        if math.isinf(ill) != math.isinf(view):
+            raise ValueError(f"illuminated_diameter_mm = {ill:g}, viewed_diameter_mm = "
+                             f"{view:g}: both infinite (the 'infinite' geometry) or both finite")
         if view > ill and not GEOMETRIES[self.geometry].view_may_exceed_light:
             raise ValueError(
                 f"viewed_diameter_mm = {view:g} is larger than illuminated_diameter_mm = "
                 f"{ill:g}: geometry {self.geometry} views inside the lit area (allowed "
                 f"viewed_diameter_mm <= {ill:g})")
-        _backing("backing_black", self.backing_black)
-        _backing("backing_white", self.backing_white)
+        fields = {"illuminated_diameter_mm": ill, "viewed_diameter_mm": view,
+                  "backing_black": _backing("backing_black", self.backing_black),
+                  "backing_white": _backing("backing_white", self.backing_white)}
         if self.contact_index is not None:
-            _number("contact_index", self.contact_index, 1.0, False)
+            fields["contact_index"] = _number("contact_index", self.contact_index, 1.0, False,
+                                              CONTACT_INDEX_MAX)
         if self.specimen_diameter_mm is not None:
-            spec = _number("specimen_diameter_mm", self.specimen_diameter_mm, 0.0, True)
+            spec = _diameter("specimen_diameter_mm", self.specimen_diameter_mm)
             if view > spec:
                 raise ValueError(
                     f"viewed_diameter_mm = {view:g} is larger than specimen_diameter_mm = "
                     f"{spec:g}: the window would look past the specimen (allowed "
                     f"viewed_diameter_mm <= {spec:g})")
+            fields["specimen_diameter_mm"] = spec
+        if not isinstance(self.description, str):
+            raise ValueError(f"description = {self.description!r}: must be a string")
+        if not isinstance(self.provenance, dict):
+            raise ValueError(f"provenance = {self.provenance!r}: must be a table of strings")
+        for key, value in fields.items():  # store what was checked (floats, not "4.0")
+            object.__setattr__(self, key, value)
 
     @property
     def is_infinite(self) -> bool:
-        """The laterally infinite disc read over infinite areas (the adding formula)."""
-        return self.name == INFINITE
+        """The laterally infinite disc read over infinite areas (the adding formula): the
+        built-in ``infinite`` instrument, whose areas are infinite. A user's file cannot
+        take the name (:func:`_from_table`), and a finite instrument is never this one."""
+        return self.name == INFINITE and math.isinf(self.illuminated_diameter_mm)
 
     @property
     def spec(self) -> Geometry:
@@ -278,48 +302,62 @@ def _infinite() -> Instrument:
         provenance={"geometry": "assumed: the idealisation of dentalux.dental's adding formula"})
 
 
-def _from_table(name: str, table: dict, where: str) -> Instrument:
+def _from_table(name: str, table: dict, where: str, builtin: bool = False) -> Instrument:
+    key = f"{where}: instruments.{name}"
     if not isinstance(table, dict):
-        raise ValueError(f"{where}: instrument {name!r} must be a table of keys")
+        raise ValueError(f"{key} must be a table of keys")
+    if not builtin and name == INFINITE:
+        raise ValueError(f"{key}: the name {INFINITE!r} is reserved for the built-in "
+                         "laterally infinite geometry (the adding formula); give your "
+                         "instrument another name")
     known = set(KEYS) | {"description", "provenance"}
-    unknown = sorted(set(table) - known)
-    if unknown:
-        raise ValueError(f"{where}: instrument {name!r} has unknown key {unknown[0]!r}: "
-                         f"allowed {', '.join(sorted(known))}")
-    for key in ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm"):
-        if key not in table:
-            raise ValueError(f"{where}: instrument {name!r} needs {key!r}")
-    contact = table.get("contact_index", 1.0)
-    contact = _number(f"{name}.contact_index", contact, 1.0, False)
-    return Instrument(
-        name=name,
-        geometry=table["geometry"],
-        illuminated_diameter_mm=table["illuminated_diameter_mm"],
-        viewed_diameter_mm=table["viewed_diameter_mm"],
-        backing_black=_backing(f"{name}.backing_black", table.get("backing_black", 0.0)),
-        backing_white=_backing(f"{name}.backing_white", table.get("backing_white", 0.9)),
-        contact_index=None if contact == 1.0 else contact,
-        specimen_diameter_mm=table.get("specimen_diameter_mm"),
-        description=str(table.get("description", "")),
-        provenance=dict(table.get("provenance", {})),
-    )
-
-
-def _load(path: Path) -> dict[str, Instrument]:
+    inputs.known_keys(table, known, key)
+    for k in ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm"):
+        if k not in table:
+            raise ValueError(f"{key} needs {k!r}")
+    geometry = inputs.text(table["geometry"], f"{key}.geometry")
+    if geometry not in GEOMETRIES:
+        raise ValueError(f"{key}.geometry = {geometry!r}: allowed {', '.join(GEOMETRIES)}")
+    contact = _number(f"{key}.contact_index", table.get("contact_index", 1.0), 1.0, False,
+                      CONTACT_INDEX_MAX)
+    provenance = inputs.table(table.get("provenance", {}), f"{key}.provenance")
+    for k, v in provenance.items():
+        inputs.text(v, f"{key}.provenance.{k}")
+    spec = table.get("specimen_diameter_mm")
     try:
-        with open(path, "rb") as fh:
-            doc = tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"instrument file {path.name}: not valid TOML ({exc})") from None
+        return Instrument(
+            name=name,
+            geometry=geometry,
+            illuminated_diameter_mm=_diameter(f"{key}.illuminated_diameter_mm",
+                                              table["illuminated_diameter_mm"]),
+            viewed_diameter_mm=_diameter(f"{key}.viewed_diameter_mm",
+                                         table["viewed_diameter_mm"]),
+            backing_black=_backing(f"{key}.backing_black", table.get("backing_black", 0.0)),
+            backing_white=_backing(f"{key}.backing_white", table.get("backing_white", 0.9)),
+            contact_index=None if contact == 1.0 else contact,
+            specimen_diameter_mm=None if spec is None else _diameter(
+                f"{key}.specimen_diameter_mm", spec),
+            description=inputs.text(table.get("description", ""), f"{key}.description"),
+            provenance=dict(provenance),
+        )
+    except ValueError as exc:
+        msg = str(exc)
+        raise ValueError(msg if msg.startswith(where) else f"{key}: {msg}") from None
+
+
+def _load(path: Path, builtin: bool = False) -> dict[str, Instrument]:
+    doc = inputs.read_toml(path, "instrument file")
+    where = f"instrument file {path}"
+    inputs.known_keys(doc, ("instruments",), where)
     tables = doc.get("instruments")
     if not isinstance(tables, dict) or not tables:
-        raise ValueError(f"instrument file {path.name}: needs [instruments.NAME] tables")
-    return {name: _from_table(name, t, path.name) for name, t in tables.items()}
+        raise ValueError(f"{where}: needs [instruments.NAME] tables")
+    return {name: _from_table(name, t, where, builtin) for name, t in tables.items()}
 
 
 def presets() -> dict[str, Instrument]:
     """Every named instrument: ``infinite`` and the presets of data/instruments.toml."""
-    return {INFINITE: _infinite(), **_load(DATA)}
+    return {INFINITE: _infinite(), **_load(DATA, builtin=True)}
 
 
 def get(instrument) -> Instrument:

@@ -46,6 +46,25 @@ MAX_PIXELS = 67_108_864
 MAX_TEXTURE_PIXELS = 16_777_216
 #: Dask workers of ``--cluster local:N``: 1 ... this many per logical core
 WORKERS_PER_CORE = 2
+#: bands of one reading (``shade``, ``report``, ``design``: ``--bands full:STEP`` or a list):
+#: 380-780 nm every 0.1 nm; each band is two or three Monte Carlo runs
+MAX_READING_BANDS = 4_001
+#: nodes per layer of ``dentalux design``'s fast model (default 6, 4, 3 for 1, 2, 3 layers;
+#: the spline through them is already finer than the Monte Carlo noise at 6)
+MAX_DESIGN_NODES = 64
+#: photons one ``design`` search may trace for its fast model (nodes^layers x bands x runs x
+#: photons): about 3 hours at PHOTON_RATE
+MAX_DESIGN_PHOTONS = 100_000_000_000
+#: photons one reading (``shade``, ``report``, ``dental.read``) may trace over all its bands
+#: (photons x bands): about 3 hours at PHOTON_RATE
+MAX_READING_PHOTONS = 100_000_000_000
+#: photons per second assumed for the estimates in refusals (a 2-core machine, slab walk)
+PHOTON_RATE = 10_000_000
+#: grid nodes of a procedural tooth (``tooth --resolution``): the signed-distance fields and
+#: marching cubes take about TOOTH_NODE_SECONDS each on 2 cores (a molar at 0.1 mm: 3.2 M
+#: nodes, 31 s; at 0.07 mm: 9.1 M, 75 s), so this is under 2 minutes
+MAX_TOOTH_NODES = 10_000_000
+TOOTH_NODE_SECONDS = 1e-5
 
 # --- memory -------------------------------------------------------------------------------
 #: a request may use at most this fraction of the memory available when it starts
@@ -269,11 +288,28 @@ def check_render(settings: dict, width: int, height: int, bands: int, texels: in
                  f", volume_stored = {settings.get('volume_stored')}{textures}")
 
 
+def format_seconds(t: float) -> str:
+    """``5400`` -> ``'1.5 h'``."""
+    if t >= 3600:
+        return f"{t / 3600:.3g} h"
+    if t >= 60:
+        return f"{t / 60:.3g} min"
+    return f"{t:.2g} s"
+
+
 def check_grid(shape, spacing: float, name: str = "resolution") -> None:
-    """A procedural tooth's signed-distance grid of ``shape`` nodes at ``spacing`` mm."""
+    """A procedural tooth's signed-distance grid of ``shape`` nodes at ``spacing`` mm: at
+    most MAX_TOOTH_NODES (its time, estimated in the refusal) and the memory it needs."""
     nodes = float(shape[0]) * float(shape[1]) * float(shape[2])
     check_memory(nodes * TOOTH_NODE_BYTES,
                  f"{name} = {spacing:g} mm ({int(nodes):,} grid nodes)")
+    if nodes > MAX_TOOTH_NODES:
+        raise ValueError(
+            f"{name} = {spacing:g} mm needs {int(nodes):,} grid nodes, about "
+            f"{format_seconds(nodes * TOOTH_NODE_SECONDS)} on 2 cores: allowed at most "
+            f"{MAX_TOOTH_NODES:,} nodes (about "
+            f"{format_seconds(MAX_TOOTH_NODES * TOOTH_NODE_SECONDS)}); give a coarser "
+            f"{name}")
 
 
 def check_texture(width: int, height: int, path: str) -> None:
@@ -345,3 +381,60 @@ def check_lobes(lobes, name: str = "lobes") -> list[tuple[float, float]] | None:
     if not out:
         raise ValueError(f"{name} = []: give at least one (weight, g) pair, or None")
     return out
+
+
+# --- readings (dentalux.dental, design, shade, report) ---------------------------------------
+
+
+def check_band_count(n: int, name: str = "--bands") -> None:
+    """At most MAX_READING_BANDS bands in one reading, refused before they are built."""
+    if n > MAX_READING_BANDS:
+        raise ValueError(f"{name}: {n:,} bands is out of range: allowed at most "
+                         f"{MAX_READING_BANDS:,} (380-780 nm every 0.1 nm); each band is two "
+                         "or three Monte Carlo runs")
+
+
+def check_reading_args(photons, seed=None, reconstruction=None, threads=None,
+                       bands=None, contact=None) -> int:
+    """The counts and names of a reading's Python API (dentalux.dental.read, design):
+    ``photons`` an integer 1 ... MAX_SLAB_PHOTONS (``True`` and 500.7 refused, never read as
+    1 or truncated), ``seed`` an integer, ``reconstruction`` one of spectra.BASES (named as
+    the argument, not as the internal ``basis``). Returns the photon count."""
+    from dentalux import inputs, spectra
+
+    n = inputs.integer(photons, "photons", 1, MAX_SLAB_PHOTONS)
+    if seed is not None:
+        inputs.integer(seed, "seed", 0, 2**64 - 1)
+    if reconstruction is not None and reconstruction not in spectra.BASES:
+        raise ValueError(f"reconstruction = {reconstruction!r}: allowed "
+                         f"{', '.join(spectra.BASES)}")
+    if threads is not None:
+        inputs.integer(threads, "threads", 1, max_threads())
+    if contact is not None:  # a coupling fluid's index, as an instrument file's contact_index
+        from dentalux.instrument import CONTACT_INDEX_MAX
+
+        inputs.number(contact, "contact", 1.0, CONTACT_INDEX_MAX)
+    if bands is not None:  # the whole reading: one walk of `photons` per band at least
+        nb = len(spectra.resolve_bands(bands))
+        total = float(n) * nb
+        if total > MAX_READING_PHOTONS:
+            raise ValueError(
+                f"photons = {n:,} per band x {nb} band(s): the reading would trace at least "
+                f"{total:.3g} photons, about {format_seconds(total / PHOTON_RATE)} at "
+                f"{PHOTON_RATE / 1e6:g} M photons/s: allowed at most "
+                f"{MAX_READING_PHOTONS:.3g}; give fewer photons or bands")
+    return n
+
+
+def check_design_work(nodes: int, layers: int, bands: int, photons: int, runs: int,
+                      name: str = "nodes") -> None:
+    """The fast model of ``dentalux design`` traces nodes^layers x bands x runs x photons
+    photons before the search starts: at most MAX_DESIGN_PHOTONS (estimated time in the
+    refusal)."""
+    total = float(nodes) ** layers * bands * runs * photons
+    if total > MAX_DESIGN_PHOTONS:
+        raise ValueError(
+            f"{name} = {nodes} per layer, {layers} layer(s), {bands} band(s), photons = "
+            f"{photons:,}: the fast model would trace {total:.3g} photons, about "
+            f"{format_seconds(total / PHOTON_RATE)} at {PHOTON_RATE / 1e6:g} M photons/s: "
+            f"allowed at most {MAX_DESIGN_PHOTONS:.3g}; give fewer nodes, bands or photons")

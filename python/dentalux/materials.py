@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from dentalux import inputs
+
 try:  # Python >= 3.11
     import tomllib
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
@@ -40,6 +42,12 @@ KINDS = ("measured", "transcribed", "derived", "fitted")
 
 VALUE_KINDS = KINDS + ("assumed", "borrowed")
 """Allowed first word of a per-value provenance string (``"transcribed: ..."``)."""
+
+#: the largest absorption or scattering coefficient [1/mm]: a mean free path of 1 nm, far
+#: beyond any dental material (enamel and dentin: 1e-3 ... 1e2); 1e300 read "cr": null
+MAX_COEFFICIENT = 1e6
+#: the largest refractive index (dental materials 1.3-2.2; nothing optical exceeds about 4)
+MAX_INDEX = 10.0
 
 DATA_DIR = Path(__file__).parent / "data"
 """Directory whose ``*.toml`` files with ``[materials.*]`` tables form the library."""
@@ -272,12 +280,13 @@ def _validate(m: Material) -> None:
         raise ValueError(f"{where}: wavelength_nm must be a non-empty list [nm]")
     if not np.all(np.isfinite(lam)) or np.any(lam <= 0) or np.any(np.diff(lam) <= 0):
         raise ValueError(f"{where}: wavelength_nm must be positive and strictly increasing [nm]")
+    hi, n_hi = MAX_COEFFICIENT, MAX_INDEX
     ranges = {
-        "mua": ("[0, inf) [1/mm]", lambda v: v >= 0),
-        "mus": ("[0, inf) [1/mm]", lambda v: v >= 0),
+        "mua": (f"[0, {hi:g}] [1/mm]", lambda v: (v >= 0) & (v <= hi)),
+        "mus": (f"[0, {hi:g}] [1/mm]", lambda v: (v >= 0) & (v <= hi)),
         "g": ("(-1, 1)", lambda v: (v > -1) & (v < 1)),
         "fd": ("[0, 1]", lambda v: (v >= 0) & (v <= 1)),
-        "n": ("[1, inf)", lambda v: v >= 1),
+        "n": (f"[1, {n_hi:g}]", lambda v: (v >= 1) & (v <= n_hi)),
     }
     for q, (allowed, ok) in ranges.items():
         v = getattr(m, q)
@@ -296,6 +305,12 @@ def _validate(m: Material) -> None:
             raise ValueError(f"{where}: {q}_ci: unknown quantity, allowed {', '.join(QUANTITIES)}")
         if np.shape(v) != (lam.size, 2):
             raise ValueError(f"{where}: {q}_ci must hold one [low, high] pair per wavelength")
+        v = np.asarray(v, dtype=float)
+        bad = ~np.isfinite(v).all(axis=1) | (v[:, 0] > v[:, 1])
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            raise ValueError(f"{where}: {q}_ci[{i}] = {v[i].tolist()} at {lam[i]:g} nm: "
+                             "allowed a [low, high] pair of finite numbers, low <= high")
     prov = m.provenance
     if not isinstance(prov, dict):
         raise ValueError(f"{where}: provenance must be a table")
@@ -341,22 +356,33 @@ def _from_table(name: str, table: dict, origin: str) -> Material:
     unknown = sorted(set(table) - known)
     if unknown:
         raise ValueError(f"{where}: unknown key(s) {', '.join(unknown)}")
-    arrays = {}
-    for k in ("wavelength_nm",) + QUANTITIES:
-        try:
-            arrays[k] = np.asarray(table[k], dtype=float).reshape(-1)
-        except (TypeError, ValueError):
-            raise ValueError(f"{where}.{k} must be a list of numbers") from None
+    # strict types (dentalux.inputs): no true for a number, no "1.0"; the ranges of each
+    # quantity are _validate's
+    arrays = {"wavelength_nm": np.asarray(inputs.wavelengths(table["wavelength_nm"],
+                                                             f"{where}.wavelength_nm"))}
+    for k in QUANTITIES:
+        arrays[k] = np.asarray(inputs.numbers(table[k], f"{where}.{k}"), dtype=float)
     ci = {}
     for q in QUANTITIES:
         if f"{q}_ci" in table:
-            try:
-                ci[q] = np.asarray(table[f"{q}_ci"], dtype=float)
-            except (TypeError, ValueError):
-                raise ValueError(f"{where}.{q}_ci must be a list of [low, high] pairs") from None
-    prov = copy.deepcopy(table.get("provenance", {}))
-    if not isinstance(prov, dict):
-        raise ValueError(f"{where}.provenance must be a table")
+            key = f"{where}.{q}_ci"
+            pairs = table[f"{q}_ci"]
+            if not isinstance(pairs, list):
+                raise ValueError(f"{key} must be a list of [low, high] pairs")
+            rows = []
+            for i, pair in enumerate(pairs):
+                if not isinstance(pair, list) or len(pair) != 2:
+                    raise ValueError(f"{key}[{i}] = {pair!r}: must be a [low, high] pair")
+                low, high = inputs.numbers(pair, f"{key}[{i}]")
+                if low > high:
+                    raise ValueError(f"{key}[{i}] = [{low:g}, {high:g}]: low must not exceed "
+                                     "high")
+                rows.append((low, high))
+            ci[q] = np.asarray(rows, dtype=float).reshape(-1, 2)
+    for k in ("description",):
+        if k in table:
+            inputs.text(table[k], f"{where}.{k}")
+    prov = copy.deepcopy(inputs.table(table.get("provenance", {}), f"{where}.provenance"))
     values = prov.setdefault("values", {})
     # Quantities without their own string inherit the entry's kind and source (documented).
     for q in ("wavelength_nm",) + QUANTITIES:
@@ -379,16 +405,15 @@ def load(path) -> dict[str, Material]:
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"material file {str(path)!r} not found")
-    try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{path}: not valid TOML: {exc}") from None
+    doc = inputs.read_toml(path, "material file")
+    inputs.known_keys(doc, ("materials", "defaults"), f"material file {path}")
     tables = doc.get("materials", {})
     if not isinstance(tables, dict):
         raise ValueError(f"{path}: [materials] must be a table of tables")
     out = {name: _from_table(name, t, str(path)) for name, t in tables.items()}
-    for alias, target in doc.get("defaults", {}).items():
-        if target not in out:
+    defaults = inputs.table(doc.get("defaults", {}), f"{path}: defaults")
+    for alias, target in defaults.items():
+        if not isinstance(target, str) or target not in out:
             raise ValueError(f"{path}: defaults.{alias} = {target!r} is not a material here")
         out[alias] = out[target]
     return out

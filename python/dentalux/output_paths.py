@@ -46,6 +46,13 @@ def _raw(path) -> str:
     text = os.fspath(path)
     if not isinstance(text, str):
         text = os.fsdecode(text)
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError as exc:
+        # a name that is not UTF-8 cannot be recorded in the JSON that lists the outputs
+        bad = os.fsencode(text[exc.start:exc.end])
+        raise OutputError(f"output path {os.fsencode(text)!r}: not a UTF-8 name (byte "
+                          f"0x{bad[0]:02x}); give a UTF-8 name") from None
     return text
 
 
@@ -167,6 +174,7 @@ def staged_dir(out, field: str = "--out"):
         if new:
             os.chmod(stage, _umask_mode(0o777))
         yield stage
+        _rebase_json_files(stage, out)
         for f in stage.iterdir():
             if f.is_file() and not f.is_symlink():
                 os.chmod(f, _umask_mode(0o666))
@@ -190,6 +198,25 @@ def staged_dir(out, field: str = "--out"):
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
         raise
+
+
+def _rebase_json_files(stage: Path, out: Path, max_bytes: int = 16 << 20) -> None:
+    """Rewrite the JSON files written in ``stage`` (colour.json, tooth.json, ...) so that the
+    paths they record point under ``out``, where the files finally are, not into the
+    temporary folder that is gone once the block ends."""
+    import json
+
+    from dentalux.strict_json import dumps_strict
+
+    for f in stage.iterdir():
+        if f.suffix != ".json" or not f.is_file() or f.is_symlink() \
+                or f.stat().st_size > max_bytes:
+            continue
+        text = f.read_text(encoding="utf-8")
+        if str(stage) not in text and json.dumps(str(stage))[1:-1] not in text:
+            continue
+        f.write_text(dumps_strict(rebase(json.loads(text), stage, out), indent=2),
+                     encoding="utf-8")
 
 
 def rebase(obj, old: Path, new: Path):

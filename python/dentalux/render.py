@@ -145,6 +145,25 @@ def build_settings(scene: Scene, integrator=None, spp=None, photons=None, seed=N
     return validate_settings(settings, path="")
 
 
+def plan(scene, integrator: str | None = None, spp: int | None = None,
+         photons: int | None = None, bands=None, seed: int | None = None,
+         threads: int | None = None, resolution=None, **options) -> dict:
+    """Every check :func:`render` makes before the core starts, in one place: the scene, the
+    bands (the colour range, distinct), the settings (the core's ranges) and the ceilings
+    and memory of docs/limits.md. ``dentalux scene check`` calls it too, so that it never
+    calls valid what ``dentalux render`` refuses. Returns the scene, bands, settings,
+    resolution and texture pixels."""
+    sc = as_scene(scene)
+    band_list = validate_bands(sc.bands if bands is None else bands, "bands")
+    settings = build_settings(sc, integrator=integrator, spp=spp, photons=photons, seed=seed,
+                              threads=threads, **options)
+    res = _resolution(resolution) or sc.resolution
+    texels = sc.texels()
+    limits.check_render(settings, res[0], res[1], len(band_list), texels)
+    return {"scene": sc, "bands": band_list, "settings": settings, "resolution": res,
+            "texels": texels}
+
+
 def render(scene, integrator: str | None = None, spp: int | None = None,
            photons: int | None = None, bands=None, seed: int | None = None,
            threads: int | None = None, resolution=None, progress: bool | None = None,
@@ -179,11 +198,10 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     regions are estimated with less variance. Each band is still unbiased.
     """
     t0 = time.perf_counter()
-    sc = as_scene(scene)
-    band_list = validate_bands(sc.bands if bands is None else bands, "bands")
-    settings = build_settings(sc, integrator=integrator, spp=spp, photons=photons, seed=seed,
-                              threads=threads, **options)
-    res = _resolution(resolution) or sc.resolution
+    p = plan(scene, integrator=integrator, spp=spp, photons=photons, bands=bands, seed=seed,
+             threads=threads, resolution=resolution, **options)
+    sc, band_list, settings, res, texels = (p["scene"], p["bands"], p["settings"],
+                                            p["resolution"], p["texels"])
     render_bands = core_render_bands()
     w, h = res
     nb = len(band_list)
@@ -192,8 +210,6 @@ def render(scene, integrator: str | None = None, spp: int | None = None,
     # surfaces carry a texture's pixels, so those bands go one at a time (one copy in memory)
     # unless a spectral pass or hero camera paths need them all at once, which the memory
     # check then counts.
-    texels = sc.texels()
-    limits.check_render(settings, w, h, nb, texels)
     groups = [list(range(nb))] if together or not texels else [[b] for b in range(nb)]
     # The core's progress(done) counts photons traced plus pixels finished, summed over the
     # bands of a call, photons once for a spectral pass (render.rs)

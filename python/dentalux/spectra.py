@@ -65,6 +65,9 @@ def resolve_bands(spec="full", step: float = 10.0) -> np.ndarray:
         bands = np.asarray(spec, dtype=float).ravel()
     except (TypeError, ValueError):
         raise ValueError(f"bands = {spec!r}: expected numbers [nm]") from None
+    from dentalux.limits import check_band_count
+
+    check_band_count(bands.size, "bands")
     if bands.size == 0 or not np.all(np.isfinite(bands)) or np.any(bands <= 0):
         raise ValueError(f"bands = {spec!r}: need at least one positive finite wavelength [nm]")
     if np.any(np.diff(bands) <= 0):

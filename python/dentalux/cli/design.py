@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import json
-
 import typer
 from rich.console import Console
 from rich.table import Table
 
 from dentalux import instrument as instruments
 from dentalux.cli import measure_options
+from dentalux.strict_json import dumps_checked
 
 
 def design_command(
@@ -76,7 +75,7 @@ def design_command(
         out = res.to_json()
         if rendered is not None:
             out["render"] = _render_json(rendered)
-        print(json.dumps(out, allow_nan=False))
+        print(dumps_checked(out, "design"))
         return
     t = res.target
     table = Table(title=f"designs for L*a*b* {t.lab[0]:.2f} {t.lab[1]:.2f} {t.lab[2]:.2f}"

@@ -15,7 +15,16 @@ def figures_command(
     only: str = typer.Option(None, help=f"comma-separated subset of {','.join(FIGURES)}"),
 ) -> None:
     """Render Fig. 2-5 of the paper, a crown-vs-natural-tooth figure and a vpm/volpath crop."""
-    subset = [s.strip() for s in only.split(",") if s.strip()] if only else None
+    subset = None
+    if only is not None:  # --only '' names nothing: refused, not read as "all of them"
+        subset = [s.strip() for s in only.split(",") if s.strip()]
+        if not subset:
+            raise ValueError(f"--only = {only!r}: names no figure: allowed a comma-separated "
+                             f"subset of {','.join(FIGURES)} (leave --only out for all)")
+        bad = [s for s in subset if s not in FIGURES]
+        if bad:
+            raise ValueError(f"--only = {only!r}: unknown figure {bad[0]!r}: allowed "
+                             f"{','.join(FIGURES)}")
     # the figures are regenerated in place, so an existing folder is expected
     out = check_out_dir(out, "--out", overwrite=True)
     report = make_figures(out, quality=quality, only=subset)

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import json
-
 import typer
 from rich.console import Console
 from rich.table import Table
 
 from dentalux import instrument
+from dentalux.strict_json import dumps_checked
 
 app = typer.Typer(help="Instrument presets: lit spot, window, geometry, backings, contact.",
                   no_args_is_help=True)
@@ -19,7 +18,7 @@ def list_command(as_json: bool = typer.Option(False, "--json", help="print JSON"
     """Every preset with its geometry and diameters."""
     presets = instrument.presets()
     if as_json:
-        print(json.dumps({n: i.to_json() for n, i in presets.items()}))
+        print(dumps_checked({n: i.to_json() for n, i in presets.items()}, "instruments list"))
         return
     table = Table(title=f"instruments (default for `dentalux shade`: {instrument.DEFAULT})")
     for col in ("name", "geometry", "lit [mm]", "viewed [mm]", "backings b / w", "contact"):
@@ -39,8 +38,8 @@ def show_command(name: str = typer.Argument(..., help="preset name or TOML file"
     """One instrument with the source of every number."""
     inst = instrument.get(name)
     if as_json:
-        print(json.dumps({**inst.to_json(), "description": inst.description,
-                          "provenance": inst.provenance}))
+        print(dumps_checked({**inst.to_json(), "description": inst.description,
+                             "provenance": inst.provenance}, "instruments show"))
         return
     console = Console()
     console.print(f"[bold]{inst.name}[/bold]: {inst.description}")

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +11,7 @@ from rich.console import Console
 from rich.table import Table
 
 from dentalux import materials as lib
+from dentalux.strict_json import dumps_checked
 
 materials_app = typer.Typer(
     no_args_is_help=True,
@@ -36,7 +36,7 @@ def list_command(
             "description": m.description,
         })
     if as_json:
-        print(json.dumps({"materials": rows}))
+        print(dumps_checked({"materials": rows}, "materials list"))
         return
     console = Console()
     console.print(list_table(rows, console.width))
@@ -86,7 +86,7 @@ def show_command(
         d["evaluated"] = {"wavelength_nm": list(wavelength),
                           **{q: getattr(opt, q).tolist() for q in lib.QUANTITIES}}
     if as_json:
-        print(json.dumps(d))
+        print(dumps_checked(d, "materials show"))
         return
     console = Console()
     console.print(f"[bold]{m.name}[/bold]: {m.description}")

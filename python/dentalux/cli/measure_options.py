@@ -5,11 +5,12 @@
 from __future__ import annotations
 
 import inspect
+import math
 from typing import Annotated
 
 import typer
 
-from dentalux import dental
+from dentalux import dental, limits
 from dentalux.spectra import full_bands
 
 DEFAULTS = {name: p.default for name, p in inspect.signature(dental.metrics).parameters.items()}
@@ -40,10 +41,17 @@ def bands(spec: str):
         return spec
     if spec.startswith("full:"):  # full:STEP, a 380-780 nm sweep every STEP nm
         try:
-            return full_bands(step=float(spec[5:]))
+            step = float(spec[5:])
         except ValueError:
-            raise ValueError(f"--bands = {spec!r}: full:STEP needs a step > 0 [nm]") from None
+            step = math.nan
+        if not (math.isfinite(step) and step > 0):
+            raise ValueError(f"--bands = {spec!r}: full:STEP needs a step > 0 [nm]")
+        # the count before the array: full:0.0001 is 4 million bands, refused here
+        limits.check_band_count(int(round(400.0 / step)) + 1, f"--bands = {spec!r}")
+        return full_bands(step=step)
     try:
-        return [float(x) for x in spec.split(",") if x.strip()]
+        out = [float(x) for x in spec.split(",") if x.strip()]
     except ValueError:
         raise ValueError(f"--bands = {spec!r}: 'full', 'paper' or comma-separated nm") from None
+    limits.check_band_count(len(out), "--bands")
+    return out

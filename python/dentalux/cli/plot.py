@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import json
-
 import typer
 
 from dentalux.output_paths import check_out_dir, rebase, staged_dir
+from dentalux.strict_json import dumps_checked
 
 # figure name -> the function of dentalux.plots that draws it (imported when drawn:
 # matplotlib and colour-science are slow to import)
@@ -27,7 +26,7 @@ def plot_command(
     out = check_out_dir(out, "--out", overwrite=True)
     with staged_dir(out, "--out") as stage:
         paths = rebase(getattr(plots, FIGURES[figure])(stage), stage, out)
-    print(json.dumps(paths) if as_json else "\n".join(paths.values()))
+    print(dumps_checked(paths, "plot") if as_json else "\n".join(paths.values()))
 
 
 def register(app: typer.Typer) -> None:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import typer
@@ -12,6 +11,7 @@ from rich.table import Table
 from dentalux.cli.render import parse_bands
 from dentalux.scene.load import load_scene
 from dentalux.scene.resolve import to_plain
+from dentalux.strict_json import dumps_checked
 
 scene_app = typer.Typer(no_args_is_help=True, help="Scene files: validation and inspection.")
 
@@ -27,18 +27,22 @@ def check_command(
         help="let the scene read files outside its folder"),
 ) -> None:
     """Validate SCENE_FILE (exit code 2 with the key path on error) and summarise it."""
+    from dentalux.render import plan
+
     scene = load_scene(scene_file, allow_outside_paths=allow_outside_paths)
+    # the checks `dentalux render` makes before it starts (bands, settings, ceilings,
+    # memory): check never calls valid what render refuses
+    band_list = plan(scene, bands=parse_bands(bands))["bands"]
     summary = dict(scene.summary(), files_read=scene.files_read())
     if dump:
-        band_list = parse_bands(bands) or scene.bands
-        print(json.dumps({
+        print(dumps_checked({
             "summary": summary,
             "scene": scene.description,
             "resolved": {f"{wl:g}": scene.resolve(wl) for wl in band_list},
-        }, indent=1, default=to_plain))
+        }, "scene check --dump", indent=1, default=to_plain))
         return
     if as_json:
-        print(json.dumps(summary))
+        print(dumps_checked(summary, "scene check"))
         return
     table = Table(title=f"{scene_file}: valid")
     table.add_column("key")

@@ -10,6 +10,7 @@ from dentalux import dental, instrument
 from dentalux.cli import measure_options as mo
 from dentalux.cli.measure_options import DEFAULTS
 from dentalux.outputs import dumps_strict
+from dentalux.strict_json import check_finite
 
 
 def shade_command(
@@ -70,6 +71,7 @@ def shade_command(
               progress=False if as_json else None, precision=precision)
     out = dental.shade(material, thickness, against=against, instrument=inst, match=match,
                        specimen=specimen, **kw)
+    check_finite(out, "shade")  # a NaN or inf reading is an error, never printed
     if as_json:
         print(dumps_strict(out))
         return

@@ -24,11 +24,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dentalux import dental
+from dentalux import dental, inputs, limits
 from dentalux import instrument as instruments
 from dentalux.color import delta_e00
 from dentalux.design import constraints, substrates, targets, verify
-from dentalux.design.forward import ColourMap, Surface, check_data
+from dentalux.design.forward import DEFAULT_NODES, ColourMap, Surface, check_data
 from dentalux.spectra import resolve_bands
 
 DEFAULT_PHOTONS = 10_000
@@ -181,6 +181,12 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
         raise ValueError(f"substrate = {substrate!r}: the instrument model does not take this "
                          f"spectral backing ({exc}); give reflectance:R for now") from None
     wl = resolve_bands(bands)
+    limits.check_reading_args(photons, seed, reconstruction, threads)
+    if nodes is not None:  # a whole number, never truncated (3.5 was read as 3)
+        nodes = inputs.integer(nodes, "nodes", 2, limits.MAX_DESIGN_NODES)
+    # the fast model's photons, before any is traced (two runs per node with a TP target)
+    limits.check_design_work(nodes or DEFAULT_NODES[len(spec)], len(spec), len(wl),
+                             limits.check_reading_args(photons), 2 if target_tp is not None else 1)
     for name, value in (("photons", photons), ("designs", designs)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise ValueError(f"{name} = {value!r} is out of range: allowed an integer >= 1")
@@ -237,6 +243,9 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
         photons, plan = dental.photons_for_precision(
             middle + tail, precision, seed=seed, instrument=inst, **common)
         verify_photons = photons
+        # the fast model's photons again, now that the precision has chosen them
+        limits.check_design_work(nodes or DEFAULT_NODES[len(spec)], len(spec), len(wl),
+                                 photons, 2 if target_tp is not None else 1)
 
     tgt = targets.parse(target, target_tp, read=read_stack)
     tp = tgt.tp00 is not None

@@ -32,9 +32,10 @@ TOML (or any library material).
 
 from __future__ import annotations
 
-import csv
 import math
 from pathlib import Path
+
+from dentalux import inputs
 
 SUBSTRATE_DENTIN_MM = 2.0
 STUMP_MUA_FACTOR = 4.0
@@ -54,23 +55,27 @@ PROVENANCE = {
 
 
 def _reflectance_file(path: Path) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A substrate's reflectance CSV (columns wavelength_nm, reflectance) by the rules of
+    dentalux.inputs: UTF-8, every row complete, wavelengths strictly increasing and finite,
+    reflectances in [0, 1]."""
     if not path.is_file():
         raise ValueError(f"substrate reflectance file {str(path)!r} not found")
-    wl, r = [], []
-    with open(path, newline="", encoding="utf-8") as fh:
-        for row in csv.DictReader(fh):
-            try:
-                wl.append(float(row["wavelength_nm"]))
-                r.append(float(row["reflectance"]))
-            except (KeyError, TypeError, ValueError):
-                raise ValueError(f"substrate reflectance file {path.name}: needs numeric "
-                                 "columns wavelength_nm, reflectance") from None
-    if not wl or any(b <= a for a, b in zip(wl, wl[1:], strict=False)):
-        raise ValueError(f"substrate reflectance file {path.name}: wavelength_nm must be "
-                         "non-empty and strictly increasing [nm]")
-    if any(not (0.0 <= x <= 1.0) for x in r):
-        raise ValueError(f"substrate reflectance file {path.name}: reflectance must lie in "
-                         "[0, 1]")
+    what = "substrate reflectance file"
+    header, rows = inputs.read_csv(path, what)
+    where = f"{what} {path}"
+    missing = [c for c in ("wavelength_nm", "reflectance") if c not in header]
+    if missing:
+        raise ValueError(f"{where}: missing column(s) {', '.join(missing)} (needs "
+                         "wavelength_nm, reflectance)")
+    if not rows:
+        raise ValueError(f"{where}: no data rows")
+    wl = [inputs.cell(row, "wavelength_nm", where) for row in rows]
+    r = [inputs.cell(row, "reflectance", where) for row in rows]
+    for row, x in zip(rows, r, strict=True):
+        if not 0.0 <= x <= 1.0:
+            raise ValueError(f"{where}: line {row['_line']}: reflectance = {x:g}: reflectance "
+                             "must lie in [0, 1]")
+    inputs.wavelengths(wl, f"{where}: wavelength_nm")
     return tuple(wl), tuple(r)
 
 

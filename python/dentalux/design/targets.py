@@ -77,7 +77,21 @@ def check_tp(tp, name: str = "target_tp") -> float | None:
 def parse_stack(text: str) -> list[tuple[str, float]]:
     """``MATERIAL:MM[/MATERIAL:MM...]`` -> [(material, thickness)], top to bottom."""
     out = []
-    for i, part in enumerate(p for p in text.split("/") if p.strip()):
+    # layers are separated by '/', which a material's file path also holds: a layer ends
+    # only where the text so far ends in ':MM' (a number), e.g. 'lab/my.toml:0.5/dentin:2'
+    parts, buf = [], None
+    for piece in text.split("/"):
+        buf = piece if buf is None else f"{buf}/{piece}"
+        try:
+            float(buf.rpartition(":")[2].strip())
+        except ValueError:
+            continue
+        if ":" in buf:
+            parts.append(buf)
+            buf = None
+    if buf is not None and buf.strip():
+        parts.append(buf)
+    for i, part in enumerate(p for p in parts if p.strip()):
         material, sep, mm = part.strip().rpartition(":")
         try:
             t = float(mm)

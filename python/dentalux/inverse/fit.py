@@ -103,6 +103,11 @@ def fit(tt: float, tr: float, n: float, g: float, thickness: float, model: str =
     if tol is None:
         tol = DEFAULT_TOL[model]
     tol = check_number("tol", tol, 0.0, 0.1, lo_open=True)
+    if wavelength_nm is not None:  # recorded in the result and the spectrum TOML
+        from dentalux.inputs import WAVELENGTH_RANGE_NM
+
+        wavelength_nm = check_number("wavelength_nm", wavelength_nm, *WAVELENGTH_RANGE_NM,
+                                     unit="nm")
     check_measurement(tt, tr, n, n_outside, tr_diffuse_only)
     if model == "ad" and n_outside != 1.0:
         raise ValueError(

@@ -8,9 +8,7 @@ mus_ci and a ``provenance`` table).
 
 from __future__ import annotations
 
-import csv
 import datetime as _dt
-import io
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -18,6 +16,7 @@ from pathlib import Path
 
 import tomli_w
 
+from dentalux import inputs
 from dentalux.inverse.fit import fit
 from dentalux.inverse.result import FitResult
 from dentalux.progress import bar
@@ -36,9 +35,8 @@ def read_table(source) -> list[dict[str, float]]:
         path = Path(source)
         if not path.is_file():
             raise FileNotFoundError(f"measurement table {str(path)!r} not found")
-        text = "".join(line for line in path.read_text().splitlines(keepends=True)
-                       if not line.lstrip().startswith("#") and line.strip())
-        rows = list(csv.DictReader(io.StringIO(text)))
+        # UTF-8 (a BOM dropped), bounded fields, every row as long as the header
+        _, rows = inputs.read_csv(path, "measurement table", comments=True)
         origin = str(path)
     elif hasattr(source, "to_dict"):  # pandas / polars-like DataFrame
         cols = source.to_dict("list") if callable(source.to_dict) else source.to_dict
@@ -57,20 +55,33 @@ def read_table(source) -> list[dict[str, float]]:
         raise ValueError(f"table {origin!r} has no data rows")
     out = []
     for i, row in enumerate(rows):
-        row = {str(k).strip(): v for k, v in row.items() if k is not None}
+        line = row.get("_line")
+        row = {str(k).strip(): v for k, v in row.items() if k is not None and k != "_line"}
+        at = f"line {line}" if line is not None else f"row {i + 1}"
         missing = [c for c in REQUIRED if c not in row]
         if missing:
             raise ValueError(f"table {origin!r}: missing column(s) {', '.join(missing)} "
                              f"(required: {','.join(REQUIRED)}; optional: {','.join(OPTIONAL)})")
         rec = {}
         for key in REQUIRED + OPTIONAL:
-            if key not in row or row[key] in ("", None):
+            empty = key not in row or row[key] is None or (
+                isinstance(row[key], str) and not row[key].strip())
+            if empty and key in REQUIRED:  # was a bare KeyError: "error: thickness_mm"
+                raise ValueError(f"table {origin!r} {at}: {key} is empty: needs a number")
+            if empty:
                 continue
+            value = row[key]
+            if isinstance(value, bool):
+                raise ValueError(f"table {origin!r} {at}: {key} = {value!r} is not a number")
             try:
-                rec[key] = float(row[key])
+                x = float(value.strip() if isinstance(value, str) else value)
             except (TypeError, ValueError):
-                raise ValueError(f"table {origin!r} row {i + 1}: {key} = {row[key]!r} is "
-                                 "not a number") from None
+                raise ValueError(f"table {origin!r} {at}: {key} = {value!r} is not a "
+                                 "number") from None
+            if not math.isfinite(x):
+                raise ValueError(f"table {origin!r} {at}: {key} = {value!r}: must be a finite "
+                                 "number")
+            rec[key] = x
         out.append(rec)
     return out
 

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dentalux import dental
+from dentalux import dental, inputs
 
 #: decimals shown for each JSON key (the full value is in the cell's data-value)
 DIGITS = {"lab_black": 2, "lab_white": 2, "lab_transmitted": 2, "tp": 2, "tp00": 2,
@@ -45,6 +45,9 @@ SPECTRUM_KEYS = ("wavelength_nm", "reflectance_black", "reflectance_white",
 RUN_COST_KEYS = ("cpu_seconds",)
 #: thickness factors of the TP-vs-thickness chart when none are given (times --thickness)
 TP_FACTORS = (0.25, 0.5, 1.0, 1.5, 2.0)
+#: the largest image ``--figure`` (or a ``--render`` folder's image) embeds [bytes]: the HTML
+#: holds it as base64 (4/3 larger) and a browser must load it whole
+MAX_FIGURE_BYTES = 64 * 1024 * 1024
 FIGURE_SUFFIXES = {".png": (b"\x89PNG\r\n\x1a\n", "image/png"),
                    ".jpg": (b"\xff\xd8\xff", "image/jpeg"), ".jpeg": (b"\xff\xd8\xff",
                                                                    "image/jpeg")}
@@ -61,9 +64,14 @@ def shade_json(material, thickness: float, against=None, instrument=None, match=
 
     ``kw``: the keyword arguments of :func:`dentalux.dental.read` (bands, backings, contact,
     photons, seed, estimator, observer, illuminant, threads)."""
+    from dentalux.strict_json import check_finite
+
     kw.setdefault("progress", False)
-    return dental.shade(material, thickness, against=against, instrument=instrument,
-                        match=match, **kw)
+    out = dental.shade(material, thickness, against=against, instrument=instrument,
+                       match=match, **kw)
+    # as `dentalux shade`: a NaN or inf reading is an error, never a number in the report
+    check_finite(out, f"report: {material} at {thickness:g} mm")
+    return out
 
 
 def _leaves(obj, prefix: str = "") -> list[tuple[str, object]]:
@@ -173,17 +181,24 @@ def _input_text(key: str, value) -> str:
     return str(value)
 
 
-def _figure(path) -> dict:
-    """A rendered image to embed (``--figure``): PNG or JPEG, checked by its magic bytes."""
+def _figure(path, option: str = "--figure") -> dict:
+    """A rendered image to embed (``--figure``; ``option`` names the option in errors, e.g.
+    ``--render`` for a render folder's image): PNG or JPEG, checked by its magic bytes and
+    its size (at most MAX_FIGURE_BYTES, before it is read)."""
     p = Path(path)
     kind = FIGURE_SUFFIXES.get(p.suffix.lower())
     if kind is None:
-        raise ValueError(f"--figure = {str(path)!r}: allowed a .png or .jpg file")
+        raise ValueError(f"{option} = {str(path)!r}: allowed a .png or .jpg file")
     if not p.is_file():
-        raise FileNotFoundError(f"--figure: file not found: {path}")
+        raise FileNotFoundError(f"{option}: file not found: {path}")
+    size = p.stat().st_size
+    if size > MAX_FIGURE_BYTES:
+        raise ValueError(f"{option} = {str(path)!r}: {size:,} bytes is too large to embed: "
+                         f"allowed at most {MAX_FIGURE_BYTES:,} bytes (the report would hold "
+                         f"{size * 4 // 3:,} bytes of base64)")
     blob = p.read_bytes()
     if not blob.startswith(kind[0]):
-        raise ValueError(f"--figure = {str(path)!r}: not a {p.suffix.lower()[1:]} image")
+        raise ValueError(f"{option} = {str(path)!r}: not a {p.suffix.lower()[1:]} image")
     return {"name": p.name, "src": f"data:{kind[1]};base64,{base64.b64encode(blob).decode()}"}
 
 
@@ -222,17 +237,21 @@ def _render(folder) -> dict:
     if not d.is_dir() or not colour.is_file():
         raise ValueError(f"--render = {str(folder)!r}: not a `dentalux render --out` folder "
                          "with a colour image (no colour.json in it)")
+    # standard JSON, UTF-8, depth and size bounded (dentalux.inputs): errors name the file
+    c = inputs.read_json(colour, "--render: colour file")
+    meta = inputs.read_json(d / "render.json", "--render: render file") \
+        if (d / "render.json").is_file() else {}
     try:
-        c = json.loads(colour.read_text(encoding="utf-8"))
-        meta = json.loads((d / "render.json").read_text(encoding="utf-8")) \
-            if (d / "render.json").is_file() else {}
         regions = [{"name": str(n), "rect": ", ".join(str(int(v)) for v in r["rect"]),
                     "lab": [f"{float(x):.2f}" for x in r["lab"]]}
                    for n, r in (c.get("regions") or {}).items()]
     except (ValueError, KeyError, TypeError, AttributeError):
         raise ValueError(f"--render = {str(folder)!r}: colour.json or render.json is not "
                          "what `dentalux render` writes") from None
-    image = _figure(d / "image.png")
+    if not (d / "image.png").is_file():
+        raise ValueError(f"--render = {str(folder)!r}: no image.png in it (was the render "
+                         "written with --out to this folder?)")
+    image = _figure(d / "image.png", "--render")
     return {**image, "name": f"{meta.get('scene_name') or d.name} ({d.name}/image.png)",
             "regions": regions, "illuminant": c.get("illuminant"),
             "observer": c.get("observer")}

@@ -24,9 +24,17 @@ def read_toml(path: str | Path) -> dict:
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"scene file not found: {p}")
+    from dentalux import inputs
+    from dentalux.scene.files import MAX_FILE_BYTES
+
     try:
-        with p.open("rb") as f:
-            return tomllib.load(f)
+        # UTF-8 with a BOM tolerated; another encoding or binary names the file (a scene
+        # may carry its meshes inline: as large as the mesh files it may read)
+        text = inputs.read_text(p, "scene file", MAX_FILE_BYTES)
+    except ValueError as exc:
+        raise SceneError(str(exc)) from None
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{p}: not valid TOML ({exc})") from None
     except RecursionError:

@@ -533,6 +533,10 @@ def _table_array(value: Any, kinds: str, cols: int) -> np.ndarray | None:
         return None
     if raw.ndim != 2 or raw.shape[1] != cols or raw.shape[0] == 0 or raw.dtype.kind not in kinds:
         return None
+    # numpy reads [0, 1, true] as integers: a bool in a list is never an index or a number
+    if not isinstance(value, np.ndarray) and any(
+            isinstance(x, bool | np.bool_) for row in value for x in row):
+        return None
     return raw
 
 
