@@ -49,6 +49,7 @@ from dentalux import instrument as instruments
 from dentalux import limits, reading
 from dentalux.color import delta_e00, delta_e00_scale, delta_e76, system
 from dentalux.spectra import Reconstruction, resolve_bands
+from dentalux.strict_json import check_finite
 
 PT, AT = 0.8, 1.8  # ΔE00 50:50 % perceptibility / acceptability (Paravina et al. 2015)
 TPT, TAT = 0.62, 2.62  # ΔTP00 50:50 % perceptibility / acceptability thresholds
@@ -266,6 +267,9 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
                            edge_loss_white=spectra.edge_loss[1])
         edge_loss = {"black": float(spectra.edge_loss[0].mean()),
                      "white": float(spectra.edge_loss[1].mean())}
+    # a NaN or inf reading (coefficients at the edge of their ranges) is an error, never a
+    # number handed on
+    check_finite({"values": out, "stderr": stderr}, "dental.read")
     return DentalMetrics(
         material=" / ".join(str(getattr(m, "name", "material")) for m, _ in parts),
         thickness=float(sum(t for _, t in parts)),
