@@ -19,7 +19,8 @@ def main() -> None:
     photons = int(sys.argv[3]) if len(sys.argv) > 3 else dental.DEFAULT_PHOTONS
     print(f"{material}, {thickness} mm, 41 bands, {photons} photons per band and run")
     for estimator in ("weighted", "analog"):
-        m = dental.metrics(material, thickness, photons=photons, estimator=estimator)
+        m = dental.metrics(material, thickness, photons=photons, estimator=estimator,
+                           instrument="infinite")
         e = m.stderr
         print(
             f"{estimator:9s} {m.seconds:6.2f} s  {m.photons / m.seconds:12,.0f} photons/s  "

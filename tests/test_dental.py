@@ -1,5 +1,6 @@
 """Dental metrics on the slab simulator: closed forms, limits, trends and the shade command."""
 
+import functools
 import json
 import math
 from dataclasses import dataclass
@@ -7,6 +8,10 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 from dentalux import color, dental
+
+# the laterally infinite disc over infinite areas: the geometry of the closed forms and of
+# the adding formula these tests check (the API's default is the default instrument)
+metrics_infinite = functools.partial(dental.metrics, instrument="infinite")
 
 
 @dataclass
@@ -66,7 +71,7 @@ def test_clear_disc_matches_closed_form_and_tp_is_the_backing_difference():
     mat = ToyMaterial("glass", mua=1.0, mus=0.0)
     mat._mua = np.interp(mat.wavelength_nm, bands, mua)  # linear in l: exact at every band
     d = 1.0
-    m = dental.metrics(mat, d, bands=bands, photons=20_000, seed=3, estimator="weighted")
+    m = metrics_infinite(mat, d, bands=bands, photons=20_000, seed=3, estimator="weighted")
     cf = np.array([_clear_disc_closed_form(a, 1.5, d) for a in mua]).T  # (4, bands)
     for i, key in enumerate(("r1", "t1", "r2", "t2")):
         got, err = np.array(m.spectra[key]), np.array(m.spectra[f"{key}_stderr"])
@@ -88,7 +93,7 @@ def test_clear_disc_matches_closed_form_and_tp_is_the_backing_difference():
 
 def test_tp_falls_and_cr_rises_with_thickness():
     mat = ToyMaterial("dentin-like", mua=0.3, mus=10.0, g=0.9, n=1.54)
-    res = [dental.metrics(mat, d, bands="paper", photons=20_000, estimator="analog", seed=5)
+    res = [metrics_infinite(mat, d, bands="paper", photons=20_000, estimator="analog", seed=5)
            for d in (0.5, 1.0, 2.0)]
     for a, b in zip(res, res[1:], strict=False):
         assert a.tp - b.tp > 4 * math.hypot(a.stderr["tp"], b.stderr["tp"])
@@ -99,7 +104,7 @@ def test_tp_falls_and_cr_rises_with_thickness():
 
 def test_opaque_disc_has_tp_zero_and_cr_one():
     mat = ToyMaterial("opaque", mua=1.0, mus=60.0, g=0.0, n=1.5)
-    m = dental.metrics(mat, 3.0, bands="paper", photons=5_000, estimator="analog")
+    m = metrics_infinite(mat, 3.0, bands="paper", photons=5_000, estimator="analog")
     # the transmittance exp(-sqrt(3 mua (mua + mus')) d) ~ 1e-16: no light reaches the backing
     assert m.tp < 1e-6 and m.tp00 < 1e-6
     assert m.cr == pytest.approx(1.0, abs=1e-9)
@@ -110,7 +115,7 @@ def test_optical_contact_removes_the_backing_interface():
     """Clear disc in optical contact through its own index: no lower interface, so the
     light transmitted into the coupling medium is (1 - r) exp(-mua d)."""
     mat = ToyMaterial("glass", mua=0.5, mus=0.0, n=1.5)
-    m = dental.metrics(mat, 1.0, bands=[450, 550, 650], contact=1.5, photons=20_000)
+    m = metrics_infinite(mat, 1.0, bands=[450, 550, 650], contact=1.5, photons=20_000)
     r = ((1.5 - 1) / 2.5) ** 2
     t1, err = np.array(m.spectra["t1"]), np.array(m.spectra["t1_stderr"])
     assert np.all(np.abs(t1 - (1 - r) * math.exp(-0.5)) <= 4 * err + 1e-12)
@@ -181,7 +186,7 @@ def test_reported_stderr_matches_the_spread_over_seeds():
     """The delta-method standard errors agree with the scatter of independent runs."""
     mat = ToyMaterial("dentin-like", mua=0.3, mus=10.0, g=0.9, n=1.54)
     bands = np.arange(400.0, 701.0, 50.0)
-    runs = [dental.metrics(mat, 1.0, bands=bands, photons=4_000, seed=s) for s in range(16)]
+    runs = [metrics_infinite(mat, 1.0, bands=bands, photons=4_000, seed=s) for s in range(16)]
     for key in ("tp", "tp00", "cr", "op"):
         spread = np.std([getattr(r, key) for r in runs], ddof=1)
         reported = np.sqrt(np.mean([r.stderr[key] ** 2 for r in runs]))
@@ -195,7 +200,7 @@ def test_scattering_disc_against_adding_doubling():
     iad = pytest.importorskip("iadpython")
     mat = ToyMaterial("dentin-like", mua=[0.5, 0.1], mus=[30.0, 20.0], g=0.93, n=1.54)
     bands = np.array([420.0, 520.0, 620.0, 720.0])
-    m = dental.metrics(mat, 1.0, bands=bands, photons=20_000, seed=7)
+    m = metrics_infinite(mat, 1.0, bands=bands, photons=20_000, seed=7)
     ad = []
     for lam in bands:
         o = mat.at(lam)
@@ -221,5 +226,5 @@ def test_material_from_a_file_with_several_materials(tmp_path):
         dental.metrics(path, 1.0, bands="paper")
     with pytest.raises(ValueError, match="'nope' not in"):
         dental.metrics(f"{path}:nope", 1.0, bands="paper")
-    m = dental.metrics(f"{path}:toy2", 1.0, bands="paper", photons=2_000)
+    m = metrics_infinite(f"{path}:toy2", 1.0, bands="paper", photons=2_000)
     assert m.material == "toy2" and m.tp > 0

@@ -150,3 +150,25 @@ def test_shared_walks_match_one_walk_per_band():
     assert shared.method == "shared-walks" and 0 < shared.extra["concentration"] < 1
     with pytest.raises(ValueError, match="walks"):
         reading.measure(band_stacks, wl, inst, *rb, 100, seed=1, walks="hero")
+
+
+def test_command_line_and_api_read_through_the_same_default(capsys):
+    """`dentalux shade X` and `dental.metrics(X)` give the same numbers for the same seed:
+    one default instrument for both."""
+    code, out = _cli(["shade", "enamel", "--bands", "450,550,650", "--photons", "1500",
+                      "--json"], capsys)
+    assert code in (0, None)
+    cli = json.loads(out.out)
+    api = dental.metrics("enamel", 1.0, bands=BANDS, photons=1500).to_json()
+    assert cli["instrument"]["name"] == instrument.DEFAULT == api["instrument"]["name"]
+    for key in ("lab_black", "lab_white", "tp00", "cr", "stderr"):
+        assert cli[key] == json.loads(json.dumps(api[key])), key
+
+
+def test_typed_results_with_short_reprs():
+    m = dental.read(STACK, bands=BANDS, photons=1000)
+    assert isinstance(m.lab_white, dental.Lab) and m.lab_white.L == m.lab_white[0]
+    err = m.error("lab_white")
+    assert err.a == m.stderr["lab_white.a"] and m.measured("tp00").stderr == m.stderr["tp00"]
+    assert len(repr(m)) < 300 and "±" in repr(m)
+    assert json.loads(json.dumps(m.to_json()))["lab_white"] == list(m.lab_white)

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -64,15 +65,39 @@ DEFAULT_PHOTONS = 20_000
 DEFAULT_BANDS = "full"
 
 
-@dataclass
+class Lab(NamedTuple):
+    """A CIELAB colour: L*, a*, b* (a tuple, so it indexes, iterates and prints to JSON as
+    a list)."""
+
+    L: float
+    a: float
+    b: float
+
+    def __repr__(self) -> str:
+        return f"Lab(L={self.L:.2f}, a={self.a:.2f}, b={self.b:.2f})"
+
+
+class Measured(NamedTuple):
+    """A number with its standard error."""
+
+    value: float
+    stderr: float
+
+    def __repr__(self) -> str:
+        return f"{self.value:.4g} ± {self.stderr:.2g}"
+
+
+@dataclass(repr=False)
 class DentalMetrics:
-    """Colour numbers of a disc, each scalar with its Monte Carlo standard error in ``stderr``."""
+    """Colour numbers of a disc, each with its Monte Carlo standard error in ``stderr``
+    (flat keys ``'lab_white.L'``, ``'tp00'``, ...; :meth:`error` and :meth:`measured` give
+    them typed)."""
 
     material: str
     thickness: float
-    lab_black: list[float]
-    lab_white: list[float]
-    lab_transmitted: list[float]
+    lab_black: Lab
+    lab_white: Lab
+    lab_transmitted: Lab
     tp: float
     tp00: float
     cr: float
@@ -89,6 +114,29 @@ class DentalMetrics:
     edge_loss: dict = field(default_factory=dict)
     layers: list = field(default_factory=list)
 
+    def error(self, key: str) -> Lab | float:
+        """The standard error of ``key``: a :class:`Lab` of errors for a colour, a float for
+        a scalar (``tp``, ``tp00``, ``cr``, ``op``)."""
+        if key.startswith("lab_"):
+            return Lab(*(self.stderr[f"{key}.{c}"] for c in "Lab"))
+        return self.stderr[key]
+
+    def measured(self, key: str) -> Measured | tuple[Measured, Measured, Measured]:
+        """``key`` with its standard error side by side: a :class:`Measured` for a scalar,
+        three for a colour."""
+        value, err = getattr(self, key), self.error(key)
+        if key.startswith("lab_"):
+            return tuple(Measured(v, e) for v, e in zip(value, err, strict=True))
+        return Measured(value, err)
+
+    def __repr__(self) -> str:
+        name = self.instrument.get("name", "?")
+        w, e = self.lab_white, self.error("lab_white")
+        return (f"DentalMetrics({self.material}, {self.thickness:g} mm, read by {name}: "
+                f"L*a*b* over white {w.L:.2f}±{e.L:.2f} {w.a:.2f}±{e.a:.2f} "
+                f"{w.b:.2f}±{e.b:.2f}, TP00 {self.measured('tp00')}, "
+                f"CR {self.measured('cr')})")
+
     def stderr_json(self) -> dict:
         """The standard errors under the same keys as the values they qualify."""
         out = {}
@@ -101,7 +149,8 @@ class DentalMetrics:
         """The ``dentalux shade --json`` keys: the values, ``stderr`` (the same keys),
         ``cpu_seconds``, and the spectra as the instrument reads them."""
         d = asdict(self)
-        out = {k: d[k] for k in JSON_KEYS if k in d and k != "stderr"}
+        out = {k: list(d[k]) if isinstance(d[k], tuple) else d[k]
+               for k in JSON_KEYS if k in d and k != "stderr"}
         out["stderr"] = self.stderr_json()
         out["cpu_seconds"] = self.cpu_seconds
         out["photons"] = self.photons
@@ -197,10 +246,12 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
 
     ``specimen``: a list of (material, thickness [mm]) from top to bottom; a material is a
     Material, a library name, a TOML file or ``FILE.toml:NAME``. ``instrument``: an
-    :class:`dentalux.instrument.Instrument`, a preset name or a TOML file (None: the
-    ``infinite`` geometry). ``backing_black``, ``backing_white``, ``contact`` override the
-    instrument's (None keeps them). ``photons`` per band and run; ``precision`` (a target
-    standard error in ΔE00 units, :func:`photons_for_precision`) chooses them instead.
+    :class:`dentalux.instrument.Instrument`, a preset name or a TOML file (None: the default
+    instrument, :data:`dentalux.instrument.DEFAULT`, as ``dentalux shade``; ``'infinite'``
+    for a laterally infinite disc over infinite areas). ``backing_black``,
+    ``backing_white``, ``contact`` override the instrument's (None keeps them).
+    ``photons`` per band and run; ``precision`` (a target standard error in ΔE00 units,
+    :func:`photons_for_precision`) chooses them instead.
     ``walks``: 'per-band' (one walk per band) or 'shared' (every band of an instrument
     window from shared walks with a hero band per photon; :mod:`dentalux.reading.engine`).
     """
@@ -273,9 +324,9 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     return DentalMetrics(
         material=" / ".join(str(getattr(m, "name", "material")) for m, _ in parts),
         thickness=float(sum(t for _, t in parts)),
-        lab_black=out["lab_black"].tolist(),
-        lab_white=out["lab_white"].tolist(),
-        lab_transmitted=out["lab_transmitted"].tolist(),
+        lab_black=Lab(*out["lab_black"].tolist()),
+        lab_white=Lab(*out["lab_white"].tolist()),
+        lab_transmitted=Lab(*out["lab_transmitted"].tolist()),
         tp=float(out["tp"]),
         tp00=float(out["tp00"]),
         cr=float(out["cr"]),
@@ -359,8 +410,9 @@ def metrics(material, thickness: float, bands=DEFAULT_BANDS, backing_black=None,
     ``material``: a Material (anything with ``.at(l)`` giving mua, mus, g, fd, n), a library
     name, a TOML file path (one material) or ``FILE.toml:NAME``. ``bands``: 'full'
     (380-780 nm every 10 nm), 'paper' or a list [nm]. ``photons`` per band and run.
-    ``instrument``: None (the ``infinite`` geometry, black 0 and white 0.9 backings), a
-    preset name, a TOML file or an Instrument; ``backing_*`` and ``contact`` override it.
+    ``instrument``: None (:data:`dentalux.instrument.DEFAULT`, as ``dentalux shade``), a
+    preset name (``'infinite'``: a laterally infinite disc on black 0 and white 0.9
+    backings), a TOML file or an Instrument; ``backing_*`` and ``contact`` override it.
     ``reconstruction``: extrapolation basis outside the bands ('hold' or 'zero').
     """
     _check_thickness("thickness", thickness)

@@ -38,7 +38,8 @@ from dentalux import inputs
 
 DATA = Path(__file__).parent / "data" / "instruments.toml"
 INFINITE = "infinite"
-# `dentalux shade` reads through this preset unless told otherwise (Yu et al. 2009's window)
+# every reading, from the command line or the API, is through this preset unless told
+# otherwise (Yu et al. 2009's window)
 DEFAULT = "contact-probe-3mm"
 # half-width of the 45 deg ring [deg]: CIE 15 keeps every ray within 8 deg of its beam axis
 RING_HALF_WIDTH = 8.0
@@ -361,11 +362,12 @@ def presets() -> dict[str, Instrument]:
 
 
 def get(instrument) -> Instrument:
-    """An Instrument, a preset name, or a TOML file with one ``[instruments.NAME]`` table."""
+    """An Instrument, a preset name, or a TOML file with one ``[instruments.NAME]`` table;
+    None is :data:`DEFAULT`, the instrument of ``dentalux shade`` and ``dental.read``."""
     if isinstance(instrument, Instrument):
         return instrument
-    if instrument is None:
-        return _infinite()
+    if instrument is None:  # the one default of the command line and the API
+        instrument = DEFAULT
     if not isinstance(instrument, (str, Path)):
         raise ValueError(f"instrument = {instrument!r}: expected a name or a TOML file")
     text = str(instrument)

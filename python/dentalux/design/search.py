@@ -36,7 +36,24 @@ TOLERANCE_MM = 0.1  # what a technician can hold: the sensitivity step and desig
 MAX_DENSE_POINTS = 300_000
 
 
-@dataclass
+class Design(dict):
+    """One design: a dict (the ``designs[i]`` object of ``dentalux design --json``) whose
+    keys also read as attributes (``d.thickness_mm``, ``d.delta_e00``), with a short repr."""
+
+    def __getattr__(self, key):
+        try:
+            return self[key]
+        except KeyError:
+            raise AttributeError(key) from None
+
+    def __repr__(self) -> str:
+        mm = " / ".join(f"{t:.2f}" for t in self["thickness_mm"])
+        return (f"Design({mm} mm: ΔE00 {self['delta_e00']:.2f} ± "
+                f"{self['delta_e00_stderr']:.2f}, {self['verdict']}, "
+                f"{'verified' if self['verified'] else 'not verified'})")
+
+
+@dataclass(repr=False)
 class DesignResult:
     """The ranked designs and what produced them (``to_json`` is the CLI's object)."""
 
@@ -62,8 +79,13 @@ class DesignResult:
     # with a requested precision: the pilot's numbers and the photons they chose
     precision: dict | None = None
 
+    def __repr__(self) -> str:
+        best = repr(self.designs[0]) if self.designs else "no design"
+        return (f"DesignResult({len(self.designs)} designs on {self.substrate}, read by "
+                f"{self.instrument.get('name', '?')}; best {best})")
+
     def to_json(self) -> dict:
-        out = {"target": self.target.to_json(), "designs": self.designs,
+        out = {"target": self.target.to_json(), "designs": [dict(d) for d in self.designs],
                "instrument": self.instrument, "seconds": self.seconds,
                "cpu_seconds": self.search_cpu_seconds + self.verify_cpu_seconds,
                "photons_per_band": self.photons_per_band}
@@ -303,11 +325,11 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
                      "delta_e00": fast["values"]["delta_e00"], "delta_e00_stderr": fast_de_err}
         if tp:
             fast_json.update(tp00=fast["values"]["tp00"], tp00_stderr=fast["stderr"]["tp00"])
-        design = {"thickness_mm": thick, "materials": names,
+        design = Design({"thickness_mm": thick, "materials": names,
                   "sensitivity": _sensitivity(surface, point),
                   "thickness_stderr_mm": _thickness_stderr(
                       surface, point, np.asarray(fast["stderr"]["lab_white"]),
-                      np.asarray(tgt.lab_stderr))}
+                      np.asarray(tgt.lab_stderr))})
         if check:
             t0 = time.perf_counter()
             specimen = substrates.specimen(list(zip(parts, thick, strict=True)), substrate, cement)
