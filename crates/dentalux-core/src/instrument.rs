@@ -114,6 +114,26 @@ impl Window {
         }
     }
 
+    /// Probability that a point uniform over the lit disc, moved by a distance `d`, lands
+    /// inside the viewed window: the area the two discs (radii a and b, centres `d` apart)
+    /// share, over π a². The reading of a laterally uniform specimen, integrated over the
+    /// entry point instead of sampling it (see the slab walk's backing orders).
+    pub fn overlap_fraction(&self, d: f64) -> f64 {
+        let (a, b) = (self.illuminated_radius, self.viewed_radius);
+        if d >= a + b {
+            return 0.0;
+        }
+        if d <= (b - a).abs() {
+            return if a <= b { 1.0 } else { (b / a).powi(2) };
+        }
+        // the lens of two circles: each circle's segment beyond the common chord
+        let ca = ((d * d + a * a - b * b) / (2.0 * d * a)).clamp(-1.0, 1.0);
+        let cb = ((d * d + b * b - a * a) / (2.0 * d * b)).clamp(-1.0, 1.0);
+        let k = ((-d + a + b) * (d + a - b) * (d - a + b) * (d + a + b)).max(0.0);
+        let lens = a * a * ca.acos() + b * b * cb.acos() - 0.5 * k.sqrt();
+        (lens / (std::f64::consts::PI * a * a)).clamp(0.0, 1.0)
+    }
+
     /// Power an ideal Lambertian white would send through the window, as a fraction of the
     /// incident power: min(a, b)² / a² (1 for a pencil beam inside the window).
     pub fn white_fraction(&self) -> f64 {
@@ -152,6 +172,36 @@ mod tests {
         assert!((w.cone_fraction() - f).abs() < 1e-15);
         assert!(w.in_cone(45f64.to_radians().cos()));
         assert!(!w.in_cone(1.0));
+    }
+
+    #[test]
+    fn overlap_fraction_matches_counting_points() {
+        // a grid of points over the lit disc, each moved by d, counted inside the window
+        for (a, b) in [(1.5, 1.5), (1.0, 2.0), (2.0, 1.0)] {
+            let mut w = window();
+            w.illuminated_radius = a;
+            w.viewed_radius = b;
+            for d in [0.0, 0.3, 0.9, 1.7, 2.6, 3.1] {
+                let (mut inside, mut total) = (0u64, 0u64);
+                let n = 800;
+                for i in 0..n {
+                    for j in 0..n {
+                        let x = a * (2.0 * (i as f64 + 0.5) / n as f64 - 1.0);
+                        let y = a * (2.0 * (j as f64 + 0.5) / n as f64 - 1.0);
+                        if x * x + y * y <= a * a {
+                            total += 1;
+                            inside += u64::from((x + d).powi(2) + y * y <= b * b);
+                        }
+                    }
+                }
+                let counted = inside as f64 / total as f64;
+                let f = w.overlap_fraction(d);
+                assert!(
+                    (f - counted).abs() < 3e-3,
+                    "a {a} b {b} d {d}: {f} vs {counted}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -330,6 +330,10 @@ struct Tally {
     truncated: f64,
     /// Backing order of the photon being traced.
     order: usize,
+    /// With backing orders, the photon's entry point and the square of the farthest it has
+    /// been from it (see [`Tracer::window_fraction`]).
+    entry: (f64, f64),
+    excursion2: f64,
 }
 
 impl Tally {
@@ -347,6 +351,8 @@ impl Tally {
             orders: vec![0.0; cfg.backing_orders.map_or(0, |o| o.max_order + 1) * N_WINDOW],
             truncated: 0.0,
             order: 0,
+            entry: (0.0, 0.0),
+            excursion2: 0.0,
         }
     }
     fn merge(&mut self, o: &Tally) {
@@ -588,7 +594,7 @@ impl<'a> Tracer<'a> {
 
     /// Tally power `w` leaving at `pos` (|cos θ| = `cos_exit` in the medium outside)
     /// against the window: inside or outside it on the top, inside it on the bottom.
-    /// Returns whether `pos` lies inside the window.
+    /// Returns the part of the exit the window reads ([`Tracer::window_fraction`]).
     #[allow(clippy::too_many_arguments)]
     fn exit_window(
         &self,
@@ -599,22 +605,74 @@ impl<'a> Tracer<'a> {
         top: bool,
         ph: &mut Photon,
         t: &mut Tally,
-    ) -> bool {
-        let r2 = pos.x * pos.x + pos.y * pos.y;
-        let inside = r2 <= win.viewed_radius * win.viewed_radius;
-        if !top {
-            if inside {
-                self.window_add(instrument::VIEWED_T, w, ph, t);
+    ) -> f64 {
+        let frac = self.window_fraction(win, pos, t);
+        if frac == 1.0 || frac == 0.0 {
+            let inside = frac == 1.0;
+            if !top {
+                if inside {
+                    self.window_add(instrument::VIEWED_T, w, ph, t);
+                }
+            } else if inside {
+                self.window_add(instrument::VIEWED_R, w, ph, t);
+                if win.in_cone(cos_exit) {
+                    self.window_add(instrument::VIEWED_CONE, w * self.inv_cone_fraction, ph, t);
+                }
+            } else {
+                self.window_add(instrument::OUTSIDE_R, w, ph, t);
             }
-        } else if inside {
-            self.window_add(instrument::VIEWED_R, w, ph, t);
-            if win.in_cone(cos_exit) {
-                self.window_add(instrument::VIEWED_CONE, w * self.inv_cone_fraction, ph, t);
-            }
-        } else {
-            self.window_add(instrument::OUTSIDE_R, w, ph, t);
+            return frac;
         }
-        inside
+        let (w_in, w_out) = (w * frac, w * (1.0 - frac));
+        if !top {
+            self.window_add(instrument::VIEWED_T, w_in, ph, t);
+        } else {
+            self.window_add(instrument::VIEWED_R, w_in, ph, t);
+            if win.in_cone(cos_exit) {
+                self.window_add(
+                    instrument::VIEWED_CONE,
+                    w_in * self.inv_cone_fraction,
+                    ph,
+                    t,
+                );
+            }
+            self.window_add(instrument::OUTSIDE_R, w_out, ph, t);
+        }
+        frac
+    }
+
+    /// The part of an exit at `pos` that the window reads: 1 inside, 0 outside, or, with
+    /// backing orders, the exit's expectation over the entry point. The specimen is the same
+    /// everywhere across, so a walk displaced by Δ from a uniform entry point x in the lit
+    /// disc leaves inside the window with probability [`Window::overlap_fraction`](|Δ|); that
+    /// conditional expectation replaces the sampled indicator (no noise from where the photon
+    /// happened to enter). It holds while no entry point could have taken the walk past the
+    /// specimen's rim (lit radius + farthest excursion < rim radius); otherwise the sampled
+    /// entry point decides, as without backing orders. Both are unbiased given the walk.
+    #[inline]
+    fn window_fraction(&self, win: &Window, pos: Vec3, t: &Tally) -> f64 {
+        if self.orders.is_some() {
+            let (dx, dy) = (pos.x - t.entry.0, pos.y - t.entry.1);
+            let reach = win.illuminated_radius + t.excursion2.sqrt();
+            if reach * reach < self.rim2 {
+                return win.overlap_fraction((dx * dx + dy * dy).sqrt());
+            }
+        }
+        let r2 = pos.x * pos.x + pos.y * pos.y;
+        if r2 <= win.viewed_radius * win.viewed_radius {
+            1.0
+        } else {
+            0.0
+        }
+    }
+
+    /// Record how far the photon at `pos` has gone from its entry point (backing orders).
+    #[inline]
+    fn track_excursion(&self, pos: Vec3, t: &mut Tally) {
+        if self.orders.is_some() {
+            let (dx, dy) = (pos.x - t.entry.0, pos.y - t.entry.1);
+            t.excursion2 = t.excursion2.max(dx * dx + dy * dy);
+        }
     }
 
     /// The first-surface specular reflection of power `w` at the entry point `pos`.
@@ -622,8 +680,9 @@ impl<'a> Tracer<'a> {
         ph[SPEC] += w;
         ph[TOT_R] += w;
         if let Some(win) = &self.cfg.window {
-            if self.exit_window(win, pos, cos_in, w, true, ph, t) {
-                self.window_add(instrument::VIEWED_SPEC, w, ph, t);
+            let frac = self.exit_window(win, pos, cos_in, w, true, ph, t);
+            if frac > 0.0 {
+                self.window_add(instrument::VIEWED_SPEC, w * frac, ph, t);
             }
         }
     }
@@ -646,6 +705,7 @@ impl<'a> Tracer<'a> {
         let weighted = cfg.estimator == Estimator::Weighted;
         let n_layers = self.layers.len() as isize;
         t.order = 0;
+        t.excursion2 = 0.0;
         // launch direction in the medium above
         let d_above = match cfg.incidence {
             Incidence::Normal => Vec3::Z,
@@ -661,6 +721,7 @@ impl<'a> Tracer<'a> {
                 pos = Vec3::new(r * c, r * s, 0.0);
             }
         }
+        t.entry = (pos.x, pos.y);
         let eta0 = self.layers[0].eta;
         let (r0, cos_t0) = reflectance_and_cos_t(d_above.z, cfg.n_above, eta0);
         let mut w = 1.0;
@@ -707,6 +768,7 @@ impl<'a> Tracer<'a> {
             if s < db {
                 // interaction inside layer li (eqs. 2–4)
                 pos += d * s;
+                self.track_excursion(pos, t);
                 if self.beyond_rim(pos) {
                     self.window_add(instrument::RIM, w, ph, t);
                     return Ok(());
@@ -745,6 +807,7 @@ impl<'a> Tracer<'a> {
             let down = d.z > 0.0;
             pos += d * db;
             pos.z = if down { lc.z_bot } else { lc.z_top };
+            self.track_excursion(pos, t);
             if self.beyond_rim(pos) {
                 self.window_add(instrument::RIM, w, ph, t);
                 return Ok(());
