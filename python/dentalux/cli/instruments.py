@@ -21,7 +21,8 @@ def list_command(as_json: bool = typer.Option(False, "--json", help="print JSON"
         print(dumps_checked({n: i.to_json() for n, i in presets.items()}, "instruments list"))
         return
     table = Table(title=f"instruments (default for `dentalux shade`: {instrument.DEFAULT})")
-    for col in ("name", "class", "geometry", "lit [mm]", "viewed [mm]", "backings b / w", "contact"):
+    for col in ("name", "class", "geometry", "lit [mm]", "viewed [mm]", "backings b / w",
+                "contact"):
         table.add_column(col)
     for name, inst in presets.items():
         j = inst.to_json()
@@ -74,20 +75,19 @@ def validate_command(
         return
     cls = ic.classes()
     k = natural_teeth.SPREAD
-    table = Table(title=f"natural incisor ({ic.natural_incisor_text()}, substrate none, over "
-                  f"white) vs published mean ± {k:g} SD")
-    for col in ("preset", "class", "L*", "a*", "b*", "inside", "sources"):
-        table.add_column(col)
+    console = Console()
+    console.print(f"[bold]natural incisor[/bold] {ic.natural_incisor_text()} (substrate none, "
+                  f"over the white backing) vs the class's published mean ± {k:g} SD")
     for p in res["presets"]:
         pub = p["published"]
         ok = ic.check(p["reading"]["lab"], pub)
-        cells = [f"{x:.1f} vs {m:.1f} ± {s:.1f} {'pass' if o else 'FAIL'}"
-                 for x, m, s, o in zip(p["reading"]["lab"], pub["mean"], pub["sd"], ok,
-                                       strict=True)]
-        table.add_row(p["name"], p["class"], *cells, "yes" if p["inside"] else "NO",
-                      ", ".join(pub["sources"]))
-    console = Console()
-    console.print(table)
+        console.print(f"{p['name']} ({p['class']}): "
+                      + ("inside" if p["inside"] else "[bold]OUTSIDE[/bold]")
+                      + f"  sources {', '.join(pub['sources'])}")
+        for c, x, m, s, o in zip(("L*", "a*", "b*"), p["reading"]["lab"], pub["mean"],
+                                 pub["sd"], ok, strict=True):
+            console.print(f"  {c} {x:6.1f}   published {m:6.2f} ± {s:.1f}   "
+                          + ("pass" if o else "FAIL"))
     for name, c in cls.items():
         if c["published"] is None:
             console.print(f"{name}: not validated: {c['no_readings']}")
