@@ -72,6 +72,12 @@ GEOMETRIES = {
     "noncontact": Geometry("normal", _RING, "excluded", False),
     "0-d": Geometry("normal", None, "included", True),
 }
+#: instrument classes (``class`` in a TOML table; docs/instruments.md): the kind of instrument
+#: whose published natural-tooth readings a preset is checked against
+#: (:mod:`dentalux.instrument_classes`). A user's file without ``class`` is ``custom``; the
+#: built-in laterally infinite disc is ``idealised``.
+CLASSES = ("clinical-contact-probe", "benchtop-d8", "noncontact-45-0", "imaging", "custom",
+           "idealised")
 KEYS = ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm", "backing_black",
         "backing_white", "contact_index", "specimen_diameter_mm")
 
@@ -131,12 +137,15 @@ class Instrument:
     specimen_diameter_mm: float | None = None
     description: str = ""
     provenance: dict = field(default_factory=dict, compare=False)
+    instrument_class: str = "custom"
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name:
             raise ValueError(f"name = {self.name!r}: must be a non-empty string")
         if not isinstance(self.geometry, str) or self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry = {self.geometry!r}: allowed {', '.join(GEOMETRIES)}")
+        if not isinstance(self.instrument_class, str) or self.instrument_class not in CLASSES:
+            raise ValueError(f"class = {self.instrument_class!r}: allowed {', '.join(CLASSES)}")
         # only the built-in idealisation may have infinite areas (see is_infinite)
         infinite = self.name == INFINITE and self.geometry == "0-d"
         ill = _diameter("illuminated_diameter_mm", self.illuminated_diameter_mm, infinite)
@@ -232,6 +241,7 @@ class Instrument:
 
         return {
             "name": self.name,
+            "class": self.instrument_class,
             "geometry": self.geometry,
             "illuminated_diameter_mm": finite(self.illuminated_diameter_mm),
             "viewed_diameter_mm": finite(self.viewed_diameter_mm),
@@ -300,7 +310,8 @@ def _infinite() -> Instrument:
         viewed_diameter_mm=math.inf, backing_black=0.0, backing_white=0.9,
         description="Laterally infinite disc lit and viewed over infinite areas, on ideal "
                     "Lambertian backings (no edge loss): the adding formula.",
-        provenance={"geometry": "assumed: the idealisation of dentalux.dental's adding formula"})
+        provenance={"geometry": "assumed: the idealisation of dentalux.dental's adding formula"},
+        instrument_class="idealised")
 
 
 def _from_table(name: str, table: dict, where: str, builtin: bool = False) -> Instrument:
@@ -311,7 +322,7 @@ def _from_table(name: str, table: dict, where: str, builtin: bool = False) -> In
         raise ValueError(f"{key}: the name {INFINITE!r} is reserved for the built-in "
                          "laterally infinite geometry (the adding formula); give your "
                          "instrument another name")
-    known = set(KEYS) | {"description", "provenance"}
+    known = set(KEYS) | {"description", "provenance", "class"}
     inputs.known_keys(table, known, key)
     for k in ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm"):
         if k not in table:
@@ -319,6 +330,11 @@ def _from_table(name: str, table: dict, where: str, builtin: bool = False) -> In
     geometry = inputs.text(table["geometry"], f"{key}.geometry")
     if geometry not in GEOMETRIES:
         raise ValueError(f"{key}.geometry = {geometry!r}: allowed {', '.join(GEOMETRIES)}")
+    klass = inputs.text(table.get("class", "custom"), f"{key}.class")
+    if klass not in CLASSES or (klass == "idealised" and not builtin):
+        allowed = [c for c in CLASSES if builtin or c != "idealised"]
+        raise ValueError(f"{key}.class = {klass!r}: allowed {', '.join(allowed)}"
+                         + ("" if builtin else " ('idealised' is the built-in infinite disc)"))
     contact = _number(f"{key}.contact_index", table.get("contact_index", 1.0), 1.0, False,
                       CONTACT_INDEX_MAX)
     provenance = inputs.table(table.get("provenance", {}), f"{key}.provenance")
@@ -340,6 +356,7 @@ def _from_table(name: str, table: dict, where: str, builtin: bool = False) -> In
                 f"{key}.specimen_diameter_mm", spec),
             description=inputs.text(table.get("description", ""), f"{key}.description"),
             provenance=dict(provenance),
+            instrument_class=klass,
         )
     except ValueError as exc:
         msg = str(exc)

@@ -23,6 +23,8 @@ def design_command(
     cement: str = typer.Option(None, help="cement layer MATERIAL:MM between restoration "
                                "and substrate"),
     instrument: str = typer.Option(instruments.DEFAULT, help="instrument preset or TOML file"),
+    target_instrument: str = typer.Option(None, help="instrument that read the target "
+                                          "(preset or TOML file; default: --instrument)"),
     target_tp: float = typer.Option(None, help="translucency target TP00"),
     bands: measure_options.Bands = measure_options.DEFAULTS["bands"],
     photons: int = typer.Option(
@@ -46,7 +48,9 @@ def design_command(
     """Rank layer thicknesses by ΔE00 to a target, verified by the full Monte Carlo."""
     # the design package pulls in scipy's interpolation: imported here, not at start-up
     from dentalux.design import optimise, search
+    from dentalux.design import targets as design_targets
 
+    t_inst, d_inst = design_targets.resolve_instrument(target_instrument, instrument)
     photons = search.DEFAULT_PHOTONS if photons is None else photons
     if render is not None:  # refuse a bad folder or substrate before the search
         from dentalux.design import render as design_render
@@ -56,11 +60,17 @@ def design_command(
         from dentalux.design.plot import check_path
 
         check_path(plot, len(layer))
+    if t_inst != d_inst:  # read a stack target through its own instrument
+        target = design_targets.parse(target, read=design_targets.read_through(
+            target_instrument, bands=measure_options.bands(bands), photons=verify_photons
+            or photons, seed=seed + 2, threads=threads), instrument=t_inst)
     res = optimise(target, layer, total=total, substrate=substrate, cement=cement,
                    instrument=instrument, bands=measure_options.bands(bands), target_tp=target_tp,
                    photons=photons, verify_photons=verify_photons, seed=seed,
                    designs=designs, nodes=nodes, threads=threads,
                    progress=False if as_json else None, precision=precision)
+    res.target = design_targets.parse(res.target, instrument=t_inst)
+    note = design_targets.differs_note(res.target, d_inst)
     if plot is not None:
         from dentalux.design.plot import plane
 
@@ -95,6 +105,8 @@ def design_command(
                       "yes" if d["verified"] else "NO")
     console = Console()
     console.print(table)
+    if note:
+        console.print(f"note: {note}")
     console.print(f"search {res.search_seconds:.1f} s, verification {res.verify_seconds:.1f} s")
     if plot:
         console.print(f"plot: {plot}")

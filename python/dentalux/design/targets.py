@@ -11,12 +11,15 @@ Target strings (``dentalux design --target``):
   the design's instrument: its colour over the white backing becomes the target.
 
 ``tp`` adds a translucency target (TP00, ΔE00 between the readings over black and white).
+A target carries the instrument that read it (``instrument``, a preset name or file; None: the
+design's own): ``dentalux design --target-instrument NAME`` says so, and the output notes when
+the target and the prediction are read by different instruments.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 L_RANGE = (0.0, 100.0)
 AB_RANGE = (-128.0, 127.0)  # the 8-bit CIELAB encoding's range, wider than any object colour
@@ -32,9 +35,13 @@ class Target:
     source: dict = field(default_factory=dict, compare=False)
     lab_stderr: tuple[float, float, float] = (0.0, 0.0, 0.0)
     tp00_stderr: float = 0.0
+    #: the instrument that read the target (name); None: the design's own instrument
+    instrument: str | None = None
 
     def to_json(self) -> dict:
         out = {"lab": list(self.lab), "source": self.source}
+        if self.instrument is not None:
+            out["instrument"] = self.instrument
         if any(self.lab_stderr):
             out["lab_stderr"] = list(self.lab_stderr)
         if self.tp00 is not None:
@@ -106,15 +113,21 @@ def parse_stack(text: str) -> list[tuple[str, float]]:
     return out
 
 
-def parse(target, tp=None, read=None) -> Target:
+def parse(target, tp=None, read=None, instrument: str | None = None) -> Target:
     """A :class:`Target` from a target string, an (L, a, b) triple or a Target.
 
     ``read(stack) -> DentalMetrics`` reads a ``stack:`` target through the design's
-    instrument (given by :func:`dentalux.design.optimise`)."""
+    instrument (given by :func:`dentalux.design.optimise`) or through ``instrument``, the
+    name of the instrument that read the target (kept in :attr:`Target.instrument`)."""
     tp = check_tp(tp)
     if isinstance(target, Target):
-        return Target(check_lab(target.lab), tp if tp is not None else target.tp00,
-                      target.source, target.lab_stderr, target.tp00_stderr)
+        return replace(target, lab=check_lab(target.lab),
+                       tp00=tp if tp is not None else target.tp00,
+                       instrument=target.instrument if instrument is None else instrument)
+    return replace(_parse(target, tp, read), instrument=instrument)
+
+
+def _parse(target, tp, read) -> Target:
     if not isinstance(target, str):
         return Target(check_lab(target), tp, {"kind": "lab", "status": "given"})
     text = target.strip()
@@ -138,7 +151,8 @@ def parse(target, tp=None, read=None) -> Target:
         source = {"kind": "stack", "status": "derived",
                   "stack": [{"material": str(mat), "thickness_mm": t} for mat, t in stack],
                   "tp00_read": m.tp00, "tp00_read_stderr": m.stderr["tp00"],
-                  "notes": "read by the Monte Carlo slab through the design's instrument, "
+                  "notes": "read by the Monte Carlo slab through the target's instrument "
+                           "(the design's unless --target-instrument names another), "
                            "colour over its white backing; its TP00 is in tp00_read (a TP "
                            "target only when --target-tp is given)"}
         return Target(lab, tp, source, tuple(m.stderr[f"lab_white.{c}"] for c in "Lab"))
@@ -152,3 +166,38 @@ def parse(target, tp=None, read=None) -> Target:
     row = shade_guides.tab(guide, tab)  # unknown tab: ValueError naming the allowed ones
     lab = check_lab(shade_guides.lab(guide, tab), f"target {guide}:{tab}")
     return Target(lab, tp, {"kind": "shade-guide", **row.source()})
+
+
+def resolve_instrument(target_instrument, design_instrument) -> tuple[str, str]:
+    """(target instrument name, design instrument name); ``target_instrument`` None: the
+    design's. A name that is neither a preset nor a file is refused naming the field."""
+    from dentalux import instrument as instruments
+
+    design = instruments.get(design_instrument).name
+    if target_instrument is None:
+        return design, design
+    try:
+        return instruments.get(target_instrument).name, design
+    except ValueError as exc:
+        raise ValueError(f"target_instrument: {exc}") from None
+
+
+def read_through(target_instrument, **kwargs):
+    """A ``read(stack)`` for :func:`parse` that reads a ``stack:`` target through the target's
+    own instrument (``kwargs`` go to :func:`dentalux.dental.read`)."""
+    from dentalux import dental
+
+    def read(stack):
+        return dental.read(stack, instrument=target_instrument, **kwargs)
+
+    return read
+
+
+def differs_note(target: Target, design_instrument: str) -> str | None:
+    """The sentence the output adds when target and prediction are read by different
+    instruments (None when they are read alike)."""
+    if target.instrument is None or target.instrument == design_instrument:
+        return None
+    return (f"target read by {target.instrument}, prediction read by {design_instrument}: "
+            "different instruments, so the ΔE00 compares two instruments' readings as well "
+            "as two specimens")
