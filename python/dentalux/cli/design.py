@@ -75,7 +75,7 @@ def design_command(
     if plot is not None:
         from dentalux.design.plot import plane
 
-        plane(res, plot)
+        plane(res, plot, total)
     rendered = None
     if render is not None:
         rendered = design_render.render_design(res, render, quality=render_quality,
