@@ -120,7 +120,7 @@ def design_table(target, designs: list[dict], substrate: str, instrument: str,
                   + (f", TP00 {t.tp00:.1f}" if t.tp00 is not None else "")
                   + f" on {substrate}, read by {instrument}", box=box.SIMPLE_HEAD,
                   pad_edge=False, padding=(0, 1), title_justify="left")
-    table.add_column("mm, top\nto bottom", overflow="fold")
+    table.add_column("mm, top\nto bottom", no_wrap=True)
     table.add_column("L* a* b*", justify="right", overflow="fold")
     table.add_column("ΔE00\n± s.e.", justify="right", no_wrap=True)
     table.add_column("verdict", min_width=VERDICT_WIDTH, overflow="fold")

@@ -57,8 +57,11 @@ COMPARE_SHOWN = COMPARE_SHOWN + ("verdict_probability",)
 INSTRUMENT_KEY = "instrument"
 SECTION_KEYS = ("edge_loss", "shade_match")
 #: shade JSON keys not shown as cells: the spectra (drawn in the charts instead)
-SPECTRUM_KEYS = ("stderr", "wavelength_nm", "reflectance_black", "reflectance_white",
+SPECTRUM_KEYS = ("wavelength_nm", "reflectance_black", "reflectance_white",
                  "reflectance_black_stderr", "reflectance_white_stderr")
+#: shade JSON keys shown beside the values they qualify (``stderr.lab_white.L`` beside
+#: ``lab_white.L``), not as rows of their own
+PAIRED_KEYS = ("stderr",)
 #: shade JSON keys that describe a run's cost: two runs of the same seed differ in them
 RUN_COST_KEYS = ("cpu_seconds",)
 #: thickness factors of the TP-vs-thickness chart when none are given (times --thickness)
@@ -273,7 +276,7 @@ def _page(spec: str, name: str, out: dict, ref=None) -> dict:
             "sections": [{"key": k, "rows": _generic_rows(out[k], k)}
                          for k in SECTION_KEYS if k in out],
             "other": [r for k in out if k not in shown and k not in SPECTRUM_KEYS
-                      for r in _generic_rows(out[k], k)],
+                      and k not in PAIRED_KEYS for r in _generic_rows(out[k], k)],
             "json_text": json.dumps(out, indent=1)}
 
 
