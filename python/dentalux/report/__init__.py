@@ -624,9 +624,6 @@ def _read_design(doc: dict, kw: dict):
                       "`design --json` gave 'substrate'): spectra and TP00 not read")
     best = doc["designs"][0]
     cement = doc.get("cement")
-    kw = dict(kw)
-    if doc.get("bands_nm"):
-        kw["bands"] = doc["bands_nm"]
     try:
         m = design_api.read(list(zip(best["materials"], best["thickness_mm"], strict=True)),
                             substrate, None if not cement else (cement["material"],
@@ -649,6 +646,8 @@ def build_design(design, figure=None, render=None, command: str | None = None,
     doc = read_design(design)
     kw = {k: v for k, v in kw.items() if v is not None}
     kw["progress"] = False
+    if doc.get("bands_nm"):  # the design's own bands: its numbers were read at them
+        kw["bands"] = doc["bands_nm"]
     figure = _figure(figure) if figure is not None else None
     render = _render(render) if render is not None else None
     illuminant, observer = kw.get("illuminant", "D65"), kw.get("observer", "2")
