@@ -445,3 +445,20 @@ def test_design_report_refuses_bad_files_before_any_work(made_design, tmp_path):
 def _write(path, doc):
     path.write_text(json.dumps(doc))
     return path
+
+
+def test_an_evaluate_result_of_a_toml_material_is_reported(made):
+    """`design --evaluate --json` of a TOML material: the report takes its ranked candidates,
+    and reads the best one's spectra again from the material file (``layers[].spec``)."""
+    toy = made["tmp"] / "toy.toml"
+    rc, out, err = _main(["design", "--target", "lab:60,1,8", "--layer", str(toy),
+                          "--substrate", "none", "--bands", "450,550,650", "--photons",
+                          "1000", "--evaluate", "0.5,1.0", "--json"])
+    assert rc == 0, err
+    doc = json.loads(out)
+    assert doc["layers"][0]["spec"] == str(toy)
+    path = _write(made["tmp"] / "evaluated.json", doc)
+    html = report.render_html(report.build_design(path, photons=1000))
+    assert "Best of the thicknesses evaluated for L*a*b* 60.0 1.0 8.0: toy" in html
+    assert 'data-key="evaluated.1.delta_e00"' in html
+    assert "Translucency TP00" in html and "report test material" in html  # read, provenance

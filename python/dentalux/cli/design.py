@@ -83,7 +83,7 @@ def design_command(
                                                threads=threads,
                                                progress=False if as_json else None)
     if as_json:
-        out = {**res.to_json(), **_setup_json(res)}
+        out = {**res.to_json(), **_setup_json(res, layer, cement)}
         if rendered is not None:
             out["render"] = _render_json(rendered)
         print(dumps_checked(out, "design"))
@@ -142,14 +142,23 @@ def design_table(target, designs: list[dict], substrate: str, instrument: str,
     return table
 
 
-def _setup_json(res) -> dict:
+def _setup_json(res, layer_specs=(), cement_spec=None) -> dict:
     """What the design was made for, beside ``DesignResult.to_json`` (new keys, for
-    ``dentalux report --design``): the substrate, the layers' ranges, the cement, the bands."""
+    ``dentalux report --design``): the substrate, the layers (name, range and ``spec``: the
+    material as given, a library name or ``FILE.toml:NAME``, so it can be read again), the
+    cement, the bands."""
+    from dentalux.design import constraints
+
+    specs = [constraints.parse_layer(t, i)[0] for i, t in enumerate(layer_specs)]
+    layers = [{**lay, **({"spec": specs[i]} if i < len(specs) else {})}
+              for i, lay in enumerate(res.layers)]
     cement = None
     if res.cement is not None:
         cement = {"material": str(getattr(res.cement[0], "name", "material")),
                   "thickness_mm": float(res.cement[1])}
-    return {"substrate": res.substrate, "layers": res.layers, "cement": cement,
+        if cement_spec:
+            cement["spec"] = str(cement_spec).rpartition(":")[0]
+    return {"substrate": res.substrate, "layers": layers, "cement": cement,
             "bands_nm": res.bands}
 
 

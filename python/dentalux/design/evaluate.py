@@ -47,12 +47,14 @@ class EvaluationResult:
     seconds: float
     cpu_seconds: float
     photons_per_band: int
+    bands_nm: list | None = None
 
     def to_json(self) -> dict:
         return {"target": self.target.to_json(), "evaluated": self.evaluated,
                 "instrument": self.instrument, "substrate": self.substrate,
                 "layers": self.layers, "cement": self.cement, "seconds": self.seconds,
-                "cpu_seconds": self.cpu_seconds, "photons_per_band": self.photons_per_band}
+                "cpu_seconds": self.cpu_seconds, "photons_per_band": self.photons_per_band,
+                "bands_nm": self.bands_nm}
 
 
 def parse_candidates(text, layers: int) -> list[list[float]]:
@@ -217,13 +219,15 @@ def evaluate(target, layers, candidates, total=None, substrate: str = "dentin", 
     inst_json = inst.override(**substrates.backings(substrate)).to_json()
     return EvaluationResult(
         target=tgt, evaluated=out, instrument=inst_json, substrate=substrate,
-        layers=[{"material": n, "range_mm": None if r is None else list(r)}
-                for n, r in zip(names, ranges, strict=True)],
+        layers=[{"material": n, "range_mm": None if r is None else list(r),
+                 **({"spec": mat} if isinstance(mat, str) else {})}
+                for n, r, (mat, _) in zip(names, ranges, spec, strict=True)],
         cement=None if cement is None else {"material": str(getattr(cement[0], "name",
                                                                     "material")),
                                             "thickness_mm": cement[1]},
         seconds=time.perf_counter() - start, cpu_seconds=time.process_time() - cpu0,
-        photons_per_band=max(d["photons_per_band"] for d in out))
+        photons_per_band=max(d["photons_per_band"] for d in out),
+        bands_nm=[float(b) for b in wl])
 
 
 __all__ = ["EvaluationResult", "evaluate", "parse_candidates", "parse_layers"]

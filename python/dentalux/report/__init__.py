@@ -518,6 +518,14 @@ DESIGN_REQUIRED = ("thickness_mm", "materials", "lab", "delta_e00", "delta_e00_s
                    "verdict")
 
 
+def _designs_key(doc) -> str:
+    """Where a result keeps its designs: ``designs`` (a search), or ``evaluated`` (the
+    ranked candidates of ``design --evaluate --json``, which carry the same keys)."""
+    if isinstance(doc, dict) and "designs" not in doc and "evaluated" in doc:
+        return "evaluated"
+    return "designs"
+
+
 def read_design(path) -> dict:
     """The object ``dentalux design --json`` printed, read from ``path`` and checked for what
     the report needs (a ValueError naming the file and the key otherwise)."""
@@ -526,20 +534,21 @@ def read_design(path) -> dict:
         raise FileNotFoundError(f"--design: file not found: {path}")
     doc = inputs.read_json(p, "--design: design file")
     where = f"--design = {str(path)!r}"
-    if not isinstance(doc, dict) or not isinstance(doc.get("designs"), list) \
-            or not doc["designs"]:
+    if not isinstance(doc, dict) or not isinstance(doc.get(_designs_key(doc)), list) \
+            or not doc[_designs_key(doc)]:
         raise ValueError(f"{where}: not what `dentalux design --json` prints (no 'designs' "
-                         "list); `design --evaluate --json` results are not taken")
+                         "list, nor the 'evaluated' one of --evaluate)")
     tgt = doc.get("target")
     if not isinstance(tgt, dict) or not isinstance(tgt.get("lab"), list) \
             or len(tgt["lab"]) != 3:
         raise ValueError(f"{where}: 'target' has no 'lab' triple")
-    for i, d in enumerate(doc["designs"]):
+    for i, d in enumerate(doc[_designs_key(doc)]):
         missing = [k for k in DESIGN_REQUIRED if not isinstance(d, dict) or k not in d]
         if missing:
-            raise ValueError(f"{where}: designs[{i}] lacks {', '.join(missing)}")
+            raise ValueError(f"{where}: {_designs_key(doc)}[{i}] lacks {', '.join(missing)}")
         if len(d["lab"]) != 3 or len(d["thickness_mm"]) != len(d["materials"]):
-            raise ValueError(f"{where}: designs[{i}]: 'lab' or 'thickness_mm' malformed")
+            raise ValueError(f"{where}: {_designs_key(doc)}[{i}]: 'lab' or 'thickness_mm' "
+                             "malformed")
     if not isinstance(doc.get("instrument"), dict):
         raise ValueError(f"{where}: no 'instrument' object")
     return doc
@@ -572,16 +581,19 @@ def _layers_text(d: dict, cement, substrate) -> str:
     text = " over ".join(parts)
     if cement:
         text += f", cement {cement['material']} {cement['thickness_mm']:g} mm"
-    if substrate:
+    if substrate == "none":
+        text += ", with nothing behind it (on the instrument's backings)"
+    elif substrate:
         text += f", on {substrate}"
     return text
 
 
-def _design_rows(designs: list[dict]) -> list[dict]:
-    """The designs table: every number with its error, as data-key cells."""
+def _design_rows(designs: list[dict], key: str = "designs") -> list[dict]:
+    """The designs table: every number with its error, as data-key cells (``key``: the
+    JSON key of the list)."""
     rows = []
     for i, d in enumerate(designs):
-        k = f"designs.{i}"
+        k = f"{key}.{i}"
         te = d.get("thickness_stderr_mm") or [None] * len(d["thickness_mm"])
         le = d.get("lab_stderr") or [None] * 3
         row = {"rank": i + 1,
@@ -613,6 +625,16 @@ def _design_rows(designs: list[dict]) -> list[dict]:
     return rows
 
 
+def _specs(doc: dict, d: dict) -> list[str]:
+    """A design's materials as given to ``design`` (the file's ``layers[].spec``: a library
+    name or ``FILE.toml:NAME``), else their names."""
+    layers = doc.get("layers") or []
+    specs = [lay.get("spec") if isinstance(lay, dict) else None for lay in layers]
+    if len(specs) == len(d["materials"]) and all(isinstance(x, str) for x in specs):
+        return specs
+    return list(d["materials"])
+
+
 def _read_design(doc: dict, kw: dict):
     """The best design's specimen read through its instrument (spectra, TP00), or the reason
     it cannot be: (DentalMetrics or None, note)."""
@@ -622,12 +644,13 @@ def _read_design(doc: dict, kw: dict):
     if substrate is None:
         return None, ("the design file does not name its substrate (written before "
                       "`design --json` gave 'substrate'): spectra and TP00 not read")
-    best = doc["designs"][0]
+    best = doc[_designs_key(doc)][0]
     cement = doc.get("cement")
     try:
-        m = design_api.read(list(zip(best["materials"], best["thickness_mm"], strict=True)),
-                            substrate, None if not cement else (cement["material"],
-                                                                cement["thickness_mm"]),
+        m = design_api.read(list(zip(_specs(doc, best), best["thickness_mm"], strict=True)),
+                            substrate, None if not cement else (
+                                cement.get("spec") or cement["material"],
+                                cement["thickness_mm"]),
                             instrument=doc["instrument"].get("name"), **kw)
     except (ValueError, FileNotFoundError, KeyError) as exc:
         return None, f"spectra and TP00 not read: {exc}"
@@ -651,14 +674,16 @@ def build_design(design, figure=None, render=None, command: str | None = None,
     figure = _figure(figure) if figure is not None else None
     render = _render(render) if render is not None else None
     illuminant, observer = kw.get("illuminant", "D65"), kw.get("observer", "2")
-    target, designs = doc["target"], doc["designs"]
+    key = _designs_key(doc)
+    target, designs = doc["target"], doc[key]
     best = designs[0]
     label = _target_label(target)
     m, note = _read_design(doc, kw) if read else (None, "not read (read=False)")
     ins = _instrument_section(doc["instrument"])
     where = ins["geometry"]["short"]
     layers = _layers_text(best, doc.get("cement"), doc.get("substrate"))
-    sentences = [f"Best design for {label}: {layers} (top to bottom), as read by {where} "
+    best_of = "Best of the thicknesses evaluated" if key == "evaluated" else "Best design"
+    sentences = [f"{best_of} for {label}: {layers} (top to bottom), as read by {where} "
                  "over a white backing."]
     sentences.append(f"ΔE00 to the target: {best['delta_e00']:.2f} ± "
                      f"{best['delta_e00_stderr']:.2f}, {best['verdict']}: "
@@ -683,21 +708,23 @@ def build_design(design, figure=None, render=None, command: str | None = None,
             sentences.append(v + "." if v and v.startswith("NOT VERIFIED") else
                              f"Not verified by the full Monte Carlo{': ' + v if v else ''}.")
     if len(designs) > 1:
-        sentences.append(f"{len(designs) - 1} more design(s) follow in the table below.")
+        what = "candidate(s)" if key == "evaluated" else "design(s)"
+        sentences.append(f"{len(designs) - 1} more {what} follow in the table below.")
     swatches = [_swatch(f"target ({label})", target["lab"], target.get("lab_stderr"),
                         illuminant, observer, "target.lab")]
     for i, d in enumerate(designs):
         swatches.append(_swatch(f"design {i + 1}: " + "/".join(f"{t:.2f}" for t in
                                                               d["thickness_mm"]) + " mm",
                                 d["lab"], d.get("lab_stderr"), illuminant, observer,
-                                f"designs.{i}.lab"))
+                                f"{key}.{i}.lab"))
     chart_list = []
     provenance = []
     if m is not None:
         chart_list.append(charts.spectra([("design 1", m)], where))
         mats = {}
-        for name in best["materials"] + ([doc["cement"]["material"]] if doc.get("cement")
-                                         else []):
+        cement = doc.get("cement")
+        for name in _specs(doc, best) + ([cement.get("spec") or cement["material"]]
+                                         if cement else []):
             try:
                 mats[name] = dental._resolve_material(name)
             except (ValueError, FileNotFoundError, KeyError):
@@ -715,7 +742,7 @@ def build_design(design, figure=None, render=None, command: str | None = None,
         "summary": [{"name": "design 1", "sentences": sentences, "swatches": swatches,
                      "verdict": best["verdict"],
                      "verdict_class": _verdict_class(best["verdict"])}],
-        "design": {"rows": _design_rows(designs), "target": label,
+        "design": {"rows": _design_rows(designs, key), "target": label,
                    "target_cells": [{"v": _cell(f"target.lab.{j}", x, 1),
                                      "e": None if not target.get("lab_stderr") else
                                      _cell(f"target.lab_stderr.{j}",
