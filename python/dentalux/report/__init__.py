@@ -306,8 +306,9 @@ def _verdict_words(verdict: str) -> str:
     classes = verdict.split(" or ")
     if len(classes) == 1:
         return MEANING.get(verdict, verdict)
-    return (f"the estimate's ±2 s.e. interval reaches {' and '.join(classes)}: the precision "
-            "cannot decide between them (more photons narrow it)")
+    reach = ", ".join(classes[:-1]) + " and " + classes[-1]
+    return (f"the estimate's ±2 s.e. interval reaches {reach}: the precision cannot decide "
+            "between them (more photons narrow it)")
 
 
 def _swatch(label: str, lab, lab_err, illuminant: str, observer: str, key: str) -> dict:
