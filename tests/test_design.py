@@ -240,7 +240,9 @@ def test_cli_json_contract_and_plot(mats, tmp_path, capsys):
     assert code in (0, None)
     out = json.loads(capsys.readouterr().out)
     assert set(out) == {"target", "designs", "instrument", "seconds", "cpu_seconds",
-                        "photons_per_band"}
+                        "photons_per_band", "substrate", "layers", "cement", "bands_nm"}
+    assert out["substrate"] == "zirconia" and out["cement"] is None
+    assert [lay["range_mm"] for lay in out["layers"]] == [[0.2, 0.6], [0.3, 0.8]]
     assert out["target"]["lab"] == [70.0, 2.0, 15.0]
     assert out["instrument"]["backing_white"] == 0.75  # the zirconia core is the backing
     assert 1 <= len(out["designs"]) <= 2
@@ -280,7 +282,7 @@ def test_target_tp_is_reported(mats):
     (["--layer", "E:0.2-0.4", "--substrate", "zirconia", "--target-tp", "5"], "TP is 0"),
     (["--layer", "E:0.2-0.4", "--substrate", "zirconia", "--render", "out"],
      "cannot be rendered"),
-    (["--layer", "E:0.2-0.4", "--plot", "plane.png"], "exactly 2 layers"),
+    (["--layer", "E:0.2-0.4"] * 3 + ["--plot", "plane.png"], "1 or 2 layers"),
     (["--layer", "E:0.2-0.4", "--layer", "D:0.2-0.4", "--plot", "plane.txt"], "end in .png"),
 ])
 def test_cli_bad_input_exits_2(mats, capsys, args, message):

@@ -95,7 +95,7 @@ def test_cli_render_json_and_files(tmp_path, capsys, monkeypatch):
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
     assert set(doc) == {"target", "designs", "instrument", "seconds", "render", "cpu_seconds",
-                        "photons_per_band"}
+                        "photons_per_band", "substrate", "layers", "cement", "bands_nm"}
     r = doc["render"]
     assert r["predicted"]["delta_e00"] == doc["designs"][0]["delta_e00"]
     assert r["crown"]["layers"][0]["thickness_mm"] == doc["designs"][0]["thickness_mm"][0]

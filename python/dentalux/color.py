@@ -180,6 +180,19 @@ def XYZ_to_linear_srgb(XYZ, illuminant_xy=None) -> np.ndarray:
     )
 
 
+def lab_to_display_srgb(lab, illuminant: str = "D65", observer: str = "2") -> dict:
+    """A CIELAB colour (relative to the white of ``illuminant``/``observer``, as every reading
+    here is) as an 8-bit display sRGB swatch: XYZ with that white, Bradford-adapted to D65,
+    out-of-gamut components clipped. Returns ``{"rgb": (r, g, b), "hex": "#rrggbb",
+    "clipped": bool}`` (clipped: the colour lies outside the sRGB gamut)."""
+    white = system(illuminant, str(observer)).white_xy
+    xyz = colour.Lab_to_XYZ(np.asarray(lab, float), white)
+    linear = XYZ_to_linear_srgb(xyz, white)
+    clipped = bool(np.any(linear < -1e-4) or np.any(linear > 1 + 1e-4))
+    rgb = tuple(int(x) for x in display_srgb(linear))
+    return {"rgb": rgb, "hex": "#{:02x}{:02x}{:02x}".format(*rgb), "clipped": clipped}
+
+
 def tone_map(rgb: np.ndarray, method: str = "clip") -> np.ndarray:
     """Linear RGB -> [0, 1].
 

@@ -1,8 +1,10 @@
-"""``dentalux design``: which thickness of each material matches a target tooth (issue 19)."""
+"""``dentalux design``: which thickness of each material matches a target tooth (issue 19),
+or how given thicknesses rank (``--evaluate``)."""
 
 from __future__ import annotations
 
 import typer
+from rich import box
 from rich.console import Console
 from rich.table import Table
 
@@ -15,7 +17,8 @@ def design_command(
     target: str = typer.Option(..., help="lab:L,a,b | GUIDE:TAB (e.g. vita-classical:A2) | "
                                "stack:MATERIAL:MM/MATERIAL:MM/..."),
     layer: list[str] = typer.Option(..., help="MATERIAL:MIN-MAX [mm], top to bottom; "
-                                    "repeat for 1 to 3 layers"),
+                                    "repeat for 1 to 3 layers (with --evaluate the range "
+                                    "may be left out)"),
     total: str = typer.Option(None, help="total restoration thickness MIN-MAX [mm] "
                               "(veneer 0.3-0.8, crown 1.0-2.0)"),
     substrate: str = typer.Option("dentin", help="none | dentin | stump | zirconia | metal | "
@@ -36,7 +39,11 @@ def design_command(
     nodes: int = typer.Option(None, help="fast-model nodes per layer (default 6/4/3)"),
     seed: int = typer.Option(1, help="random seed"),
     threads: int = typer.Option(None, help="worker threads (default: all cores)"),
-    plot: str = typer.Option(None, help="write the ΔE00 plane of a two-layer design (PNG)"),
+    evaluate: str = typer.Option(None, help="no search: read these thicknesses T1/T2/... "
+                                 "[mm] (one per layer, top to bottom; candidates separated "
+                                 "by ',', e.g. 0.5/0.9,0.6/0.8) and rank them by ΔE00"),
+    plot: str = typer.Option(None, help="write the ΔE00 curve (one layer) or plane (two "
+                             "layers) of the design (PNG)"),
     render: str = typer.Option(None, help="render the best design's crown beside a natural "
                                "incisor into folder DIR (its files are replaced) and print the "
                                "rendered ΔE00 beside the predicted one"),
@@ -52,6 +59,10 @@ def design_command(
 
     t_inst, d_inst = design_targets.resolve_instrument(target_instrument, instrument)
     photons = search.DEFAULT_PHOTONS if photons is None else photons
+    if evaluate is not None:
+        _evaluate(target, layer, evaluate, total, substrate, cement, instrument, target_tp,
+                  bands, photons, precision, seed, threads, plot, render, as_json)
+        return
     if render is not None:  # refuse a bad folder or substrate before the search
         from dentalux.design import render as design_render
 
@@ -74,7 +85,7 @@ def design_command(
     if plot is not None:
         from dentalux.design.plot import plane
 
-        plane(res, plot)
+        plane(res, plot, total)
     rendered = None
     if render is not None:
         rendered = design_render.render_design(res, render, quality=render_quality,
@@ -82,29 +93,14 @@ def design_command(
                                                threads=threads,
                                                progress=False if as_json else None)
     if as_json:
-        out = res.to_json()
+        out = {**res.to_json(), **_setup_json(res, layer, cement)}
         if rendered is not None:
             out["render"] = _render_json(rendered)
         print(dumps_checked(out, "design"))
         return
-    t = res.target
-    table = Table(title=f"designs for L*a*b* {t.lab[0]:.2f} {t.lab[1]:.2f} {t.lab[2]:.2f}"
-                  + (f", TP00 {t.tp00:.2f}" if t.tp00 is not None else "")
-                  + f" on {res.substrate}, read by {res.instrument['name']}")
-    table.add_column("mm (top to bottom)")
-    table.add_column("L*a*b*", justify="right")
-    table.add_column("ΔE00 ± s.e.", justify="right")
-    table.add_column("verdict")
-    table.add_column("ΔE00 per 0.1 mm", justify="right")
-    table.add_column("verified")
-    for d in res.designs:
-        table.add_row(" / ".join(f"{x:.2f}" for x in d["thickness_mm"]),
-                      " ".join(f"{x:.1f}" for x in d["lab"]),
-                      f"{d['delta_e00']:.2f} ± {d['delta_e00_stderr']:.2f}", d["verdict"],
-                      " ".join(f"{x:.2f}" for x in d["sensitivity"]),
-                      "yes" if d["verified"] else "NO")
     console = Console()
-    console.print(table)
+    console.print(design_table(res.target, res.designs, res.substrate,
+                               res.instrument["name"]))
     if note:
         console.print(f"note: {note}")
     console.print(f"search {res.search_seconds:.1f} s, verification {res.verify_seconds:.1f} s")
@@ -120,6 +116,85 @@ def design_command(
                       + f"; {rendered['seconds']:.0f} s)")
         console.print(f"render: {rendered['files']['annotated_png']}, "
                       f"{rendered['files']['render_json']}")
+
+
+#: the widest single word of a verdict: the verdict column never cuts a word
+VERDICT_WIDTH = max(len(v) for v in ("imperceptible", "acceptable", "unacceptable"))
+
+
+def design_table(target, designs: list[dict], substrate: str, instrument: str,
+                 evaluated: bool = False) -> Table:
+    """The designs (or ``--evaluate``'s candidates) as a table readable at 80 columns: short
+    headers, no outer padding, the title and the verdicts wrapped at spaces, never cut."""
+    t = target
+    what = "candidates ranked" if evaluated else "designs"
+    table = Table(title=f"{what} for L*a*b* {t.lab[0]:.1f} {t.lab[1]:.1f} {t.lab[2]:.1f}"
+                  + (f", TP00 {t.tp00:.1f}" if t.tp00 is not None else "")
+                  + f" on {substrate}, read by {instrument}", box=box.SIMPLE_HEAD,
+                  pad_edge=False, padding=(0, 1), title_justify="left")
+    table.add_column("mm, top\nto bottom", no_wrap=True)
+    table.add_column("L* a* b*", justify="right", overflow="fold")
+    table.add_column("ΔE00\n± s.e.", justify="right", no_wrap=True)
+    table.add_column("verdict", min_width=VERDICT_WIDTH, overflow="fold")
+    if evaluated:
+        table.add_column("in\nranges", overflow="fold")
+    else:
+        table.add_column("ΔE00 per\n0.1 mm", justify="right", overflow="fold")
+        table.add_column("veri-\nfied", overflow="fold")
+    for d in designs:
+        row = ["/".join(f"{x:.2f}" for x in d["thickness_mm"]),
+               " ".join(f"{x:.1f}" for x in d["lab"]),
+               f"{d['delta_e00']:.2f}±{d['delta_e00_stderr']:.2f}", d["verdict"]]
+        if evaluated:
+            row.append("yes" if d["within_ranges"] else "NO")
+        else:
+            row += [" ".join(f"{x:.2f}" for x in d["sensitivity"]),
+                    "yes" if d["verified"] else "NO"]
+        table.add_row(*row)
+    return table
+
+
+def _setup_json(res, layer_specs=(), cement_spec=None) -> dict:
+    """What the design was made for, beside ``DesignResult.to_json`` (new keys, for
+    ``dentalux report --design``): the substrate, the layers (name, range and ``spec``: the
+    material as given, a library name or ``FILE.toml:NAME``, so it can be read again), the
+    cement, the bands."""
+    from dentalux.design import constraints
+
+    specs = [constraints.parse_layer(t, i)[0] for i, t in enumerate(layer_specs)]
+    layers = [{**lay, **({"spec": specs[i]} if i < len(specs) else {})}
+              for i, lay in enumerate(res.layers)]
+    cement = None
+    if res.cement is not None:
+        cement = {"material": str(getattr(res.cement[0], "name", "material")),
+                  "thickness_mm": float(res.cement[1])}
+        if cement_spec:
+            cement["spec"] = str(cement_spec).rpartition(":")[0]
+    return {"substrate": res.substrate, "layers": layers, "cement": cement,
+            "bands_nm": res.bands}
+
+
+def _evaluate(target, layer, evaluate, total, substrate, cement, instrument, target_tp, bands,
+              photons, precision, seed, threads, plot, render, as_json) -> None:
+    """``--evaluate``: read the given thicknesses and rank them (dentalux.design.evaluate)."""
+    from dentalux.design.evaluate import evaluate as run
+
+    for name, value in (("--plot", plot), ("--render", render)):
+        if value is not None:
+            raise ValueError(f"{name} with --evaluate: the plot and the render belong to a "
+                             "search; drop --evaluate to search")
+    res = run(target, layer, evaluate, total=total, substrate=substrate, cement=cement,
+              instrument=instrument, bands=measure_options.bands(bands), target_tp=target_tp,
+              photons=photons, seed=seed, precision=precision, threads=threads,
+              progress=False if as_json else None)
+    if as_json:
+        print(dumps_checked(res.to_json(), "design --evaluate"))
+        return
+    console = Console()
+    console.print(design_table(res.target, res.evaluated, res.substrate,
+                               res.instrument["name"], evaluated=True))
+    console.print(f"{len(res.evaluated)} read in {res.seconds:.1f} s, "
+                  f"{res.photons_per_band} photons per band")
 
 
 def _render_json(report: dict) -> dict:

@@ -1,4 +1,5 @@
-"""``dentalux report``: one self-contained HTML shade report of one or more materials."""
+"""``dentalux report``: one self-contained HTML report of one or more materials at a
+thickness, or of a design result (``--design design.json``, from ``dentalux design --json``)."""
 
 from __future__ import annotations
 
@@ -20,9 +21,9 @@ def _command() -> str | None:
 
 
 def report_command(
-    materials: list[str] = typer.Argument(..., help="materials: library names or TOML files "
-                                          "(as for `dentalux shade`)"),
-    thickness: float = typer.Option(..., help="disc thickness [mm]"),
+    materials: list[str] = typer.Argument(None, help="materials: library names or TOML files "
+                                          "(as for `dentalux shade`); none with --design"),
+    thickness: float = typer.Option(None, help="disc thickness [mm] (not with --design)"),
     out: Path = typer.Option(..., "--out", help="the report, an .html file (replaced if it "
                              "exists)"),
     against: str = typer.Option(None, help="reference material (name or TOML) for ΔE00/ΔTP00"),
@@ -45,9 +46,33 @@ def report_command(
     figure: Path = typer.Option(None, help="an image (.png/.jpg) to embed"),
     render: Path = typer.Option(None, help="a `dentalux render --out` folder: its image and "
                                 "the CIELAB of its regions"),
+    design: Path = typer.Option(None, help="a design result (`dentalux design --json > "
+                                "FILE.json`): its designs against its target, instead of "
+                                "materials"),
 ) -> None:
-    """One HTML file: the `shade --json` numbers, ΔE00 verdict, charts and provenance."""
+    """One HTML file: a summary in plain words with colour swatches, then the numbers (each
+    with its ±), charts and provenance."""
     from dentalux import report
+
+    if design is not None:
+        if materials or thickness is not None or against or match or tp_thicknesses \
+                or instrument or backing_black is not None or backing_white is not None \
+                or contact is not None:
+            raise ValueError("--design: give the design file alone (its materials, "
+                             "thicknesses, target and instrument are in it), without "
+                             "materials, --thickness, --against, --match, --tp-thicknesses, "
+                             "--instrument, --backing-* or --contact")
+        report.check_out(out)
+        report.read_design(design)  # refuse a bad file before any photon is traced
+        path = report.write_design(out, design, figure=figure, render=render,
+                                   command=_command(), bands=mo.bands(bands),
+                                   photons=photons, seed=seed,
+                                   estimator=estimator, observer=observer,
+                                   illuminant=illuminant, threads=threads)
+        typer.echo(f"wrote {path}")
+        return
+    if not materials or thickness is None:
+        raise ValueError("report: give materials and --thickness, or --design FILE.json")
 
     ts = None
     if tp_thicknesses is not None:

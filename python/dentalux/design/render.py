@@ -43,13 +43,72 @@ SUBSTRATES = ("dentin", "stump")
 # crown's thickness; at 2 mm (3.3 mm labially and lingually together) about 1 mm of dentin
 # is left in the 4.4 mm middle third.
 MAX_TOTAL_MM = 2.0
-# Default: the preview's settings at 120 x 90 px (72 pixels in a measured square), half its
-# stored volume photons and 2 samples per pixel: about 40 s on two idle cores, the rendered
-# ΔE00 uncertain by about 1.2 (docs/design.md: more photons or samples barely help, more
-# independent renders do); `quality="preview"` or "paper" is the figure's.
-DRAFT = replace(F.QUALITIES["preview"], name="draft", resolution=(120, 90),
+# Default: the preview's settings at 160 x 120 px (121 pixels in a measured square), half its
+# stored volume photons and 2 samples per pixel, the rendered ΔE00 uncertain by about 1.2
+# (docs/design.md: more photons or samples barely help, more independent renders do);
+# `quality="preview"` or "paper" is the figure's. The photon passes dominate its time: 160 x
+# 120 took 115 s where 120 x 90 took 90 s (the same two shared cores, one run each), and
+# crown.png shows it enlarged (ANNOTATED_MIN_WIDTH) with its labels outside the picture.
+DRAFT = replace(F.QUALITIES["preview"], name="draft", resolution=(160, 120),
                 teeth_photons=200_000, teeth_volume_stored=8_000_000, teeth_spp=2)
 QUALITIES = {"draft": DRAFT, **F.QUALITIES}
+
+
+#: crown.png is at least this wide [px]: the render enlarged by a whole factor (each pixel a
+#: square block, nothing interpolated), so a draft can be judged on a screen
+ANNOTATED_MIN_WIDTH = 640
+#: the outline colour of each measured square and of its label (the label sits above the
+#: picture, over its square's column, never on the teeth)
+REGION_COLOURS = {"crown": "#1f77b4", "natural": "#d62728"}
+
+
+def annotate(src, dst, regions: dict, text: str,
+             min_width: int = ANNOTATED_MIN_WIDTH) -> dict:
+    """``crown.png``: the render ``src`` enlarged by a whole factor to at least ``min_width``
+    pixels, each measured square outlined in its colour, its name in the same colour in a
+    band above the picture (over the square's column) and ``text`` in a band below: nothing
+    is written on the picture but the outlines. Returns the layout in ``dst``'s pixels (for
+    the tests): ``scale``, ``picture`` (x0, y0, x1, y1) and ``labels`` {name: box}."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
+
+    img = plt.imread(src)
+    h, w = img.shape[:2]
+    scale = max(1, -(-int(min_width) // w))
+    big = np.repeat(np.repeat(img, scale, axis=0), scale, axis=1)
+    band = 36  # px above (labels) and below (text)
+    W, H = w * scale, h * scale + 2 * band
+    dpi = 100
+    fig = plt.figure(figsize=(W / dpi, H / dpi), dpi=dpi)
+    ax = fig.add_axes((0, band / H, 1, h * scale / H))
+    ax.imshow(big, interpolation="nearest")
+    ax.set_xlim(-0.5, W - 0.5)
+    ax.set_ylim(h * scale - 0.5, -0.5)
+    ax.axis("off")
+    labels = {}
+    for name, (x0, y0, x1, y1) in regions.items():
+        colour = REGION_COLOURS.get(name, "#ff7f0e")
+        ax.add_patch(Rectangle((x0 * scale - 0.5, y0 * scale - 0.5), (x1 - x0) * scale,
+                               (y1 - y0) * scale, fill=False, ec=colour, lw=2.0))
+        labels[name] = fig.text((x0 + x1) / 2 * scale / W, 1 - band / 2 / H, name,
+                                color=colour, fontsize=12, fontweight="bold", ha="center",
+                                va="center")
+    caption = fig.text(0.5, band / 2 / H, text, ha="center", va="center", fontsize=11)
+    fig.savefig(dst, dpi=dpi)
+    renderer = fig.canvas.get_renderer()
+
+    def box(artist):  # display coordinates (origin bottom left) -> image rows from the top
+        b = artist.get_window_extent(renderer)
+        return (float(b.x0), float(H - b.y1), float(b.x1), float(H - b.y0))
+
+    layout = {"scale": scale, "size": (W, H), "picture": (0.0, float(band), float(W),
+                                                           float(band + h * scale)),
+              "labels": {k: box(v) for k, v in labels.items()}, "caption": box(caption)}
+    plt.close(fig)
+    return layout
 
 
 def get_quality(quality, field: str = "quality") -> F.Quality:
@@ -181,7 +240,7 @@ def render_crown(layers, out, substrate: str = "dentin", cement=None, quality="d
         text = f"ΔE00 {m['delta_e00']:.2f}"
         if predicted is not None:
             text += f" (slab {predicted['delta_e00']:.2f})"
-        F._annotate(stage / "image.png", stage / "crown.png", regions, text)
+        annotate(stage / "image.png", stage / "crown.png", regions, text)
         summary = rebase(summary, stage, out)
         summary["files"]["annotated_png"] = str(out / "crown.png")
         report = {
@@ -230,6 +289,6 @@ def render_design(res, out, index: int = 0, **kwargs) -> dict:
                         predicted=predicted, **kwargs)
 
 
-__all__ = ["DRAFT", "MAX_TOTAL_MM", "NATURAL_STACK", "QUALITIES", "SUBSTRATES", "check",
-           "get_quality", "render_crown", "render_design"]
+__all__ = ["ANNOTATED_MIN_WIDTH", "DRAFT", "MAX_TOTAL_MM", "NATURAL_STACK", "QUALITIES",
+           "SUBSTRATES", "annotate", "check", "get_quality", "render_crown", "render_design"]
 
