@@ -176,7 +176,8 @@ def test_shade_json_contract(tmp_path, capsys):
                   "3000", "--estimator", "analog", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert set(out) == set(dental.JSON_KEYS) | {"delta_e00", "delta_tp00", "verdict",
-                                                 "delta_e00_stderr", "verdict_probability"}
+                                                 "delta_e00_stderr", "verdict_probability",
+                                                 "delta_tp00_stderr"}
     # same seed: the same photons, ΔE00 0; the verdict spans what its error bar reaches
     assert out["delta_e00"] == 0.0 and out["verdict"].startswith("imperceptible")
     assert _main(["shade", str(path), "--thickness", "-1", "--json"]) == 2

@@ -450,6 +450,7 @@ def shade(material, thickness: float = 1.0, against=None, instrument=None, match
         out.update({k: cmp[k] for k in ("delta_e00", "delta_tp00", "verdict",
                                         "verdict_probability")})
         out["delta_e00_stderr"] = cmp["delta_e00_stderr"]
+        out["delta_tp00_stderr"] = cmp["delta_tp00_stderr"]
     if match:
         from dentalux import shade_guides
 
