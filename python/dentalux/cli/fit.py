@@ -12,7 +12,7 @@ from dentalux import limits
 from dentalux.inverse import fit, fit_table, write_spectrum_toml
 from dentalux.inverse.table import check_spectrum_rows, read_table
 from dentalux.output_paths import atomic_file, check_out_file
-from dentalux.outputs import dumps_strict
+from dentalux.strict_json import dumps_checked
 
 
 def _print_results(results) -> None:
@@ -97,8 +97,8 @@ def fit_command(
             write_checked_spectrum(results, out, name or out.stem, source=table.name,
                                    description=description)
         if as_json:
-            print(dumps_strict([dict(r.to_json(), wavelength_nm=r.wavelength_nm)
-                                for r in results]))
+            print(dumps_checked([dict(r.to_json(), wavelength_nm=r.wavelength_nm)
+                                 for r in results], "fit --table"))
         else:
             _print_results(results)
             if out is not None:
@@ -110,7 +110,7 @@ def fit_command(
         raise ValueError(f"missing --{', --'.join(missing)} (or give --table)")
     result = fit(tt=tt, tr=tr, n=n, g=g, thickness=thickness, **opts)
     if as_json:
-        print(dumps_strict(result.to_json()))
+        print(dumps_checked(result.to_json(), "fit"))
     else:
         _print_results([result])
 

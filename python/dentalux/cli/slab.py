@@ -16,8 +16,8 @@ from rich.table import Table
 
 from dentalux import limits
 from dentalux.output_paths import atomic_file, check_out_file
-from dentalux.outputs import dumps_strict
 from dentalux.slab import SCALARS, Layer, simulate
+from dentalux.strict_json import dumps_checked
 
 
 def _parse_layer(spec: str, index: int) -> Layer:
@@ -136,7 +136,7 @@ def slab_command(
         for k in ("radial_reflectance", "radial_transmittance", "angular_reflectance",
                   "angular_transmittance"):
             d.pop(k)
-        print(dumps_strict(d))
+        print(dumps_checked(d, "slab"))
     else:
         print_result_table(result, "slab")
         if profiles:
