@@ -374,7 +374,7 @@ def test_progress_callback_is_called_and_its_error_propagates(core):
 
 
 def test_native_progress_callback_error_propagates():
-    layer = (0.1, 10.0, 0.9, 0.0, 1.4, 1.0, None)
+    layer = (0.1, 10.0, 0.9, 1.4, 1.0, 0.0, None)  # mua, mus, g, n, thickness, fd, lobes
 
     def boom(done):
         raise ZeroDivisionError("stop")
@@ -405,7 +405,7 @@ def test_panics_become_runtime_error(capfd):
 
 
 def test_native_overflow_is_value_error():
-    layer = (0.1, 10.0, 0.9, 0.0, 1.4, 1.0, None)
+    layer = (0.1, 10.0, 0.9, 1.4, 1.0, 0.0, None)  # mua, mus, g, n, thickness, fd, lobes
     for kw in ({"threads": -1}, {"band": -5}):
         with pytest.raises(ValueError):
             _core.slab_simulate([layer], 1000, 1, **kw)
@@ -446,3 +446,21 @@ def test_spectra_bands_colour_range():
     assert list(spectra.resolve_bands([360, 830])) == [360, 830]
     with pytest.raises(ValueError, match=r"bands\[0\] = 359 nm"):
         spectra.resolve_bands([359, 400])
+
+
+def test_stages_name_what_runs_when_a_person_watches(capsys):
+    """Long runs whose total is not known in units (a tooth's meshes) show a spinner with the
+    stage and the elapsed time; nothing when no one watches."""
+    import io
+
+    from dentalux import progress
+    from rich.console import Console
+
+    with progress.stages("molar at 0.05 mm", enabled=False) as step:
+        step("building the meshes")
+    assert capsys.readouterr().err == ""
+    shown = io.StringIO()
+    console = Console(file=shown, force_terminal=True, width=80)
+    with progress.stages("molar at 0.05 mm", enabled=True, console=console) as step:
+        step("building the meshes")
+    assert "molar at 0.05 mm: building the meshes" in shown.getvalue()

@@ -17,8 +17,8 @@ SLAB_WINDOW_KEYS: list[str]
 DIFFUSE_RUN_KEY: int
 TRANSMITTED_RUN_KEY: int
 
-# One layer as Python passes it: (mua, mus, g, fd, n, thickness, lobes); dentalux.slab.Layer
-# builds it (its fields are in another order: mua, mus, g, n, thickness, fd, lobes).
+# One layer as Python passes it: dentalux.slab.Layer's fields in their order (mua, mus, g, n,
+# thickness, fd, lobes), built by Layer.as_tuple.
 LayerTuple = tuple[float, float, float, float, float, float, list[tuple[float, float]] | None]
 # An instrument window: (illuminated radius, viewed radius, specimen radius [mm], backing
 # reflectance, detector cone (low, high) [deg] or None).

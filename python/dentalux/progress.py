@@ -6,10 +6,12 @@ import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
+from rich.console import Console
 from rich.progress import (
     BarColumn,
     MofNCompleteColumn,
     Progress,
+    SpinnerColumn,
     TextColumn,
     TimeElapsedColumn,
     TimeRemainingColumn,
@@ -58,3 +60,25 @@ def bar(total: int, description: str,
 
         yield update
         prog.update(task, completed=total)
+
+
+@contextmanager
+def stages(description: str, enabled: bool | None = None,
+           console: Console | None = None) -> Iterator[Callable[[str], None]]:
+    """A spinner with the elapsed time for work whose total is not known in units (e.g. a
+    tooth's meshes), on stderr when a person is watching. Yields ``step(text)``, which names
+    the stage now running."""
+    if enabled is None:
+        enabled = _interactive()
+    if not enabled:
+        yield lambda text: None
+        return
+    columns = (SpinnerColumn(), TextColumn("[bold]{task.description}"), TimeElapsedColumn())
+    console = console or Console(stderr=True)
+    with Progress(*columns, transient=True, console=console) as prog:
+        task = prog.add_task(description, total=None)
+
+        def step(text: str) -> None:
+            prog.update(task, description=f"{description}: {text}")
+
+        yield step

@@ -46,13 +46,14 @@ class Layer:
                     f"layers[{index}].{name} = {value!r}: must be a number"
                 )
         lobes = limits.check_lobes(self.lobes, f"layers[{index}].lobes")
+        # the binding's layer tuple: the fields in their order (_core.pyi LayerTuple)
         return (
             float(self.mua),
             float(self.mus),
             float(self.g),
-            float(self.fd),
             float(self.n),
             float(self.thickness),
+            float(self.fd),
             lobes,
         )
 

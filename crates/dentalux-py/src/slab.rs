@@ -25,7 +25,8 @@ pub fn phase_from(
         .map_err(|e| PyValueError::new_err(format!("{name}{e}")))
 }
 
-/// One layer as Python passes it: (mua, mus, g, fd, n, thickness, lobes).
+/// One layer as Python passes it: `dentalux.slab.Layer`'s fields in their order (mua, mus,
+/// g, n, thickness, fd, lobes).
 type LayerTuple = (f64, f64, f64, f64, f64, f64, Option<Vec<(f64, f64)>>);
 /// An instrument window as Python passes it: (illuminated radius, viewed radius, specimen
 /// radius [mm], backing reflectance, detector cone (low, high) [deg] or None).
@@ -113,7 +114,7 @@ fn window_from((a, b, rs, backing, cone): WindowTuple) -> Window {
 /// Layers of one stack, checked, with `name` prefixing errors.
 fn stack_from(layers: Vec<LayerTuple>, prefix: &str) -> PyResult<Vec<SlabLayer>> {
     let mut stack = Vec::with_capacity(layers.len());
-    for (i, (mua, mus, g, fd, n, thickness, lobes)) in layers.into_iter().enumerate() {
+    for (i, (mua, mus, g, n, thickness, fd, lobes)) in layers.into_iter().enumerate() {
         let name = format!("{prefix}layers[{i}].");
         let phase = phase_from(&name, g, fd, lobes)?;
         let medium = Medium::new(&name, mua, mus, n, phase).map_err(runner::to_py_err)?;

@@ -6,6 +6,7 @@ import typer
 
 from dentalux.output_paths import check_out_dir, rebase, staged_dir
 from dentalux.outputs import dumps_strict
+from dentalux.progress import stages
 
 tooth_app = typer.Typer(
     no_args_is_help=True,
@@ -19,9 +20,13 @@ def _run(kind: str, out: str, resolution: float, as_json: bool,
 
     out = check_out_dir(out, "--out", overwrite=overwrite)
     build = {"incisor": teeth.incisor, "molar": teeth.molar}[kind]
-    tooth = build(resolution=resolution)
-    with staged_dir(out, "--out") as stage:
-        doc = rebase(tooth.write(stage), stage, out)
+    # a fine grid takes minutes (docs/limits.md): a person watching sees it running
+    with stages(f"{kind} at {resolution:g} mm", enabled=False if as_json else None) as step:
+        step("building the meshes")
+        tooth = build(resolution=resolution)
+        step("checking and writing")
+        with staged_dir(out, "--out") as stage:
+            doc = rebase(tooth.write(stage), stage, out)
     doc["out"] = str(out)
     if as_json:
         print(dumps_strict(doc))
