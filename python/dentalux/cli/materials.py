@@ -23,7 +23,7 @@ materials_app = typer.Typer(
 def list_command(
     as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
 ) -> None:
-    """List every material name with its provenance kind and wavelength range."""
+    """List every material name with its class, provenance kind and wavelength range."""
     rows = []
     for name in lib.names():
         m = lib.get(name)
@@ -31,6 +31,7 @@ def list_command(
             "name": name,
             "resolves_to": m.name,
             "kind": m.provenance.get("kind"),
+            "class": m.material_class,
             "wavelength_nm": [float(m.wavelength_nm[0]), float(m.wavelength_nm[-1])],
             "points": int(m.wavelength_nm.size),
             "description": m.description,
