@@ -44,7 +44,7 @@ VALUE_KINDS = KINDS + ("assumed", "borrowed")
 """Allowed first word of a per-value provenance string (``"transcribed: ..."``)."""
 
 CLASSES = ("tissue", "resin-composite", "zirconia", "lithium-disilicate", "feldspathic-ceramic",
-           "glass-ceramic", "restorative", "reference")
+           "veneering-ceramic", "glass-ceramic", "restorative", "reference")
 """Allowed ``class`` of a material entry (``materials list --json`` gives it): ``tissue``
 for enamel and dentin, the restorative classes, ``restorative`` for a restorative material
 of unnamed composition (the paper's disc), ``reference`` for idealised media such as air.
