@@ -60,19 +60,19 @@ CLASS_OPTICS = {
 # The published readings each material is fitted to: (thickness_mm, quantity, value, scale)
 # where scale is the weight's inverse in the least squares (1 TP unit, 0.01 CR).
 READINGS = {
-    "resin-composite@fitted-vichi2023-cerasmart-ht": {
+    "resin-composite@cerasmart-ht": {
         "class": "resin-composite",
         "instrument": "d8-benchtop-sav",
         "readings": [(1.0, "tp", 15.75, 1.0), (1.0, "cr", 0.59, 0.01)],
         "check": [(1.0, "tp00", 12.47)],
     },
-    "resin-composite@fitted-vichi2023-katana-avencia-op": {
+    "resin-composite@avencia-op": {
         "class": "resin-composite",
         "instrument": "d8-benchtop-sav",
         "readings": [(1.0, "tp", 8.96, 1.0), (1.0, "cr", 0.84, 0.01)],
         "check": [(1.0, "tp00", 6.31)],
     },
-    "lithium-disilicate@fitted-emax-cad-ht": {
+    "lithium-disilicate@emax-ht": {
         "class": "lithium-disilicate",
         # SpectroShade Micro's geometry is not in the abstract; of the presets tried, 45-0
         # reproduced the two TPs best (TP at 0.5 / 2.0 mm: d8-benchtop-sav 33.5 / 10.2,
@@ -87,24 +87,24 @@ READINGS = {
         "check": [(0.5, "cr", 0.65), (2.0, "cr", 0.84), (0.5, "cr_lightness", 0.65),
                   (2.0, "cr_lightness", 0.84)],
     },
-    "zirconia@fitted-iadr2010-zeno": {
+    "zirconia@zeno-iadr2010": {
         "class": "zirconia",
         "instrument": "d8-benchtop-sav",
         "readings": [(0.4, "cr", 0.705, 0.01), (1.0, "cr", 0.855, 0.01)],
     },
-    "zirconia@fitted-tuncel2016-framework": {
+    "zirconia@tuncel-framework": {
         "class": "zirconia",
         "instrument": "d8-benchtop-sav",
         "readings": [(0.5, "cr", 0.75, 0.01)],
-        "borrow_mua": "zirconia@fitted-iadr2010-zeno",
+        "borrow_mua": "zirconia@zeno-iadr2010",
     },
-    "zirconia@fitted-tuncel2016-monolithic": {
+    "zirconia@tuncel-monolithic": {
         "class": "zirconia",
         "instrument": "d8-benchtop-sav",
         "readings": [(0.5, "cr", 0.80, 0.01)],
-        "borrow_mua": "zirconia@fitted-iadr2010-zeno",
+        "borrow_mua": "zirconia@zeno-iadr2010",
     },
-    "veneering-ceramic@fitted-emax-dentine-b1": {
+    "veneering-ceramic@emax-b1": {
         "class": "veneering-ceramic",
         "instrument": "d8-benchtop-sav",
         "readings": [(2.910, "tp", 1.5, 0.1), (3.263, "tp", 1.0, 0.1)],
@@ -116,14 +116,14 @@ READINGS = {
 # or CR). A reading of the library entry must lie within this plus 4 Monte Carlo standard
 # errors of the published number.
 STATED_RESIDUAL = {
-    "resin-composite@fitted-vichi2023-cerasmart-ht": {"tp": 0.3, "cr": 0.01},
+    "resin-composite@cerasmart-ht": {"tp": 0.3, "cr": 0.01},
     # a grey model cannot give the chroma difference part of this shaded disc's TP
-    "resin-composite@fitted-vichi2023-katana-avencia-op": {"tp": 2.4, "cr": 0.012},
-    "lithium-disilicate@fitted-emax-cad-ht": {"tp": 2.8},
-    "zirconia@fitted-iadr2010-zeno": {"cr": 0.016},
-    "zirconia@fitted-tuncel2016-framework": {"cr": 0.01},
-    "zirconia@fitted-tuncel2016-monolithic": {"cr": 0.01},
-    "veneering-ceramic@fitted-emax-dentine-b1": {"tp": 0.2},
+    "resin-composite@avencia-op": {"tp": 2.4, "cr": 0.012},
+    "lithium-disilicate@emax-ht": {"tp": 2.8},
+    "zirconia@zeno-iadr2010": {"cr": 0.016},
+    "zirconia@tuncel-framework": {"cr": 0.01},
+    "zirconia@tuncel-monolithic": {"cr": 0.01},
+    "veneering-ceramic@emax-b1": {"tp": 0.2},
 }
 
 
