@@ -105,7 +105,8 @@ def show_command(
             ev.add_row(f"{lam:g}", *(f"{d['evaluated'][q][i]:.4g}" for q in lib.QUANTITIES))
         console.print(ev)
     prov = m.provenance
-    console.print(f"kind: {prov.get('kind')}\nsource: {prov.get('source')}")
+    console.print(f"class: {m.material_class}\nkind: {prov.get('kind')}\n"
+                  f"source: {prov.get('source')}")
     if prov.get("notes"):
         console.print(f"notes: {prov['notes']}")
     for q, entry in prov.get("values", {}).items():
