@@ -43,6 +43,13 @@ KINDS = ("measured", "transcribed", "derived", "fitted")
 VALUE_KINDS = KINDS + ("assumed", "borrowed")
 """Allowed first word of a per-value provenance string (``"transcribed: ..."``)."""
 
+CLASSES = ("tissue", "resin-composite", "zirconia", "lithium-disilicate", "feldspathic-ceramic",
+           "veneering-ceramic", "glass-ceramic", "restorative", "reference")
+"""Allowed ``class`` of a material entry (``materials list --json`` gives it): ``tissue``
+for enamel and dentin, the restorative classes, ``restorative`` for a restorative material
+of unnamed composition (the paper's disc), ``reference`` for idealised media such as air.
+Every library entry has one; a user's file may leave it out (``None``)."""
+
 #: the largest absorption or scattering coefficient [1/mm]: a mean free path of 1 nm, far
 #: beyond any dental material (enamel and dentin: 1e-3 ... 1e2); 1e300 read "cr": null
 MAX_COEFFICIENT = 1e6
@@ -95,6 +102,8 @@ class Material:
     description: str = ""
     ci: dict = field(default_factory=dict)
     extrapolate: bool = False
+    material_class: str | None = None
+    """The TOML's ``class`` (one of :data:`CLASSES`), or None where the file has none."""
     """Whether bands outside ``wavelength_nm`` may be used (by the extrapolation rules of the
     module doc): the TOML's ``extrapolate = true``; every library entry says so, a user's file
     must say so itself (dentalux.limits.check_bands_in)."""
@@ -187,7 +196,7 @@ class Material:
             n=self.n.copy(),
             provenance=prov,
             description=self.description,
-            extrapolate=self.extrapolate,
+            extrapolate=self.extrapolate, material_class=self.material_class,
             ci={q: v * (float(mus_factor) if q == "mus" else float(mua_factor) if q == "mua"
                         else 1.0)
                 for q, v in self.ci.items() if not (q == "g" and g is not None)},
@@ -220,6 +229,7 @@ class Material:
             name=out.name, wavelength_nm=out.wavelength_nm, mua=out.mua,
             mus=self.mus * factor, g=np.where(lower, float(g), self.g), fd=out.fd, n=out.n,
             provenance=prov, description=out.description, extrapolate=out.extrapolate,
+            material_class=out.material_class,
             ci={q: v * (factor[:, None] if q == "mus" else 1.0)
                 for q, v in out.ci.items() if q != "g"},
         )
@@ -233,6 +243,8 @@ class Material:
         """Plain-data form (lists, not arrays), as in the TOML file, plus the name."""
         d = {"name": self.name, "description": self.description,
              "wavelength_nm": self.wavelength_nm.tolist(), "extrapolate": self.extrapolate}
+        if self.material_class is not None:
+            d["class"] = self.material_class
         for q in QUANTITIES:
             d[q] = getattr(self, q).tolist()
         for q, v in self.ci.items():
@@ -351,7 +363,7 @@ def _from_table(name: str, table: dict, origin: str) -> Material:
     missing = [k for k in ("wavelength_nm",) + QUANTITIES if k not in table]
     if missing:
         raise ValueError(f"{where}: missing key(s) {', '.join(missing)}")
-    known = {"description", "wavelength_nm", "provenance", "extrapolate", *QUANTITIES,
+    known = {"description", "wavelength_nm", "provenance", "extrapolate", "class", *QUANTITIES,
              *(f"{q}_ci" for q in QUANTITIES)}
     unknown = sorted(set(table) - known)
     if unknown:
@@ -389,12 +401,16 @@ def _from_table(name: str, table: dict, origin: str) -> Material:
         if q not in values and prov.get("kind") in KINDS:
             values[q] = f"{prov['kind']}: {prov.get('source', '')} (entry-level provenance)"
     prov["file"] = origin
+    material_class = table.get("class")
+    if material_class is not None and material_class not in CLASSES:
+        raise ValueError(f"{where}.class = {material_class!r}: allowed {', '.join(CLASSES)}")
     try:
         extrapolate = table.get("extrapolate", False)
         if not isinstance(extrapolate, bool):
             raise ValueError(f"{where}.extrapolate = {extrapolate!r}: allowed true or false")
         return Material(name=name, description=str(table.get("description", "")),
-                        provenance=prov, ci=ci, extrapolate=extrapolate, **arrays)
+                        provenance=prov, ci=ci, extrapolate=extrapolate,
+                        material_class=material_class, **arrays)
     except ValueError as exc:
         raise ValueError(f"{origin}: {exc}") from None
 

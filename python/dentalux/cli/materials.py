@@ -23,7 +23,7 @@ materials_app = typer.Typer(
 def list_command(
     as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
 ) -> None:
-    """List every material name with its provenance kind and wavelength range."""
+    """List every material name with its class, provenance kind and wavelength range."""
     rows = []
     for name in lib.names():
         m = lib.get(name)
@@ -31,6 +31,7 @@ def list_command(
             "name": name,
             "resolves_to": m.name,
             "kind": m.provenance.get("kind"),
+            "class": m.material_class,
             "wavelength_nm": [float(m.wavelength_nm[0]), float(m.wavelength_nm[-1])],
             "points": int(m.wavelength_nm.size),
             "description": m.description,
@@ -104,7 +105,8 @@ def show_command(
             ev.add_row(f"{lam:g}", *(f"{d['evaluated'][q][i]:.4g}" for q in lib.QUANTITIES))
         console.print(ev)
     prov = m.provenance
-    console.print(f"kind: {prov.get('kind')}\nsource: {prov.get('source')}")
+    console.print(f"class: {m.material_class}\nkind: {prov.get('kind')}\n"
+                  f"source: {prov.get('source')}")
     if prov.get("notes"):
         console.print(f"notes: {prov['notes']}")
     for q, entry in prov.get("values", {}).items():
