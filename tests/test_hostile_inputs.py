@@ -498,3 +498,17 @@ def test_fit_records_only_a_real_wavelength(wl):
     with pytest.raises(ValueError, match=r"^wavelength_nm = "):
         fit(tt=0.4897, tr=0.3016, n=1.55, g=0.75, thickness=0.5, model="km",
             wavelength_nm=wl)
+
+
+def test_a_quoted_field_may_span_lines(tmp_path):
+    """CSV as the csv module reads it: a quoted field holding a line break is one field, and
+    rows after it keep their line numbers in messages."""
+    from dentalux import inputs
+
+    p = tmp_path / "t.csv"
+    p.write_text('name,thickness_mm,note\na,1.0,"two\nlines"\nb\n')
+    with pytest.raises(ValueError, match=r"line 4 has 1 field\(s\)"):
+        inputs.read_csv(p)
+    p.write_text('name,thickness_mm,note\na,1.0,"two\nlines"\nb,2.0,x\n')
+    _, rows = inputs.read_csv(p)
+    assert [r["note"] for r in rows] == ["two\nlines", "x"] and rows[1]["_line"] == 4

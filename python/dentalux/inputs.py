@@ -155,24 +155,36 @@ def read_csv(path, what: str = "table", comments: bool = False) -> tuple[list[st
     with ``#`` and blank lines are skipped. Row numbers in errors are file line numbers."""
     text = read_text(path, what)
     where = f"{what} {path}"
-    lines = [(i + 1, line) for i, line in enumerate(text.splitlines())
+    lines = [(i + 1, line) for i, line in enumerate(text.splitlines(keepends=True))
              if not (comments and (line.lstrip().startswith("#") or not line.strip()))]
     return parse_csv(lines, where)
 
 
 def parse_csv(lines: list[tuple[int, str]], where: str) -> tuple[list[str], list[dict]]:
-    """Numbered lines -> header and rows (see :func:`read_csv`)."""
+    """Numbered lines -> header and rows (see :func:`read_csv`). One reader runs over all the
+    lines, so a quoted field may span several; a row's number is the line it ends on."""
     old = csv.field_size_limit()
     csv.field_size_limit(MAX_CSV_FIELD)
+    at = [0]
+
+    def numbered():
+        for lineno, line in lines:
+            at[0] = lineno
+            yield line
+
+    reader = csv.reader(numbered())
     try:
         header: list[str] | None = None
         rows = []
-        for lineno, line in lines:
+        while True:
             try:
-                fields = next(csv.reader(io.StringIO(line)), [])
+                fields = next(reader)
+            except StopIteration:
+                break
             except csv.Error as exc:
-                raise ValueError(f"{where}: line {lineno}: {exc} (a field may hold at most "
+                raise ValueError(f"{where}: line {at[0]}: {exc} (a field may hold at most "
                                  f"{MAX_CSV_FIELD:,} characters)") from None
+            lineno = at[0]
             if any(len(f) > MAX_CSV_FIELD for f in fields):
                 raise ValueError(f"{where}: line {lineno}: a field longer than "
                                  f"{MAX_CSV_FIELD:,} characters")
