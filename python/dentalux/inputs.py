@@ -23,7 +23,6 @@ with the file (or ``what`` the caller names) and the key path, and states what i
 from __future__ import annotations
 
 import csv
-import io
 import json
 import math
 import sys
