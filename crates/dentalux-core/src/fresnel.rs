@@ -60,7 +60,7 @@ mod tests {
             let r0 = ((n1 - n2) / (n1 + n2)).powi(2);
             assert!((r - r0).abs() < 1e-14);
         }
-        // tooth-optics.md 2.5: R0 = 0.0574 for n = 1.63
+        // docs/explanation/tooth-optics.md 2.5: R0 = 0.0574 for n = 1.63
         assert!((reflectance(1.0, 1.0, 1.63) - 0.0574).abs() < 5e-5);
     }
 

@@ -125,7 +125,7 @@ fn beam_estimate_agrees_with_volpath_nee_on_nested_spheres() {
 }
 
 /// The per-pixel bias against `volpath-nee` shrinks with the disc radius (the curve of
-/// docs/bre.md): at 2 mm (half the disc's radius) it is well above its value at 0.25 mm.
+/// docs/notes/2026-12-06-bre.md): at 2 mm (half the disc's radius) it is well above its value at 0.25 mm.
 #[test]
 fn beam_bias_shrinks_with_radius() {
     let scene = disc_scene(1.0, 20, 15);

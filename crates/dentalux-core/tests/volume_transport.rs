@@ -518,7 +518,7 @@ fn vpm_full_nested_spheres_agree_with_volpath() {
     assert!(e.abs() < 4.0 * se + 0.025, "relative error {e}");
 }
 
-/// The convergence curve recorded in docs/vpm-convergence.md (slow: run with
+/// The convergence curve recorded in docs/notes/2026-12-02-vpm-convergence.md (slow: run with
 /// `cargo test --release -p dentalux-core --test volume_transport -- --ignored --nocapture`).
 #[test]
 #[ignore]

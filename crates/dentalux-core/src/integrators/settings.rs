@@ -10,12 +10,12 @@ pub const MAX_PASSES: u32 = 1 << PASS_BITS;
 
 /// Default of [`Settings::kernel_layer`] (`VpmParams::layer`): the layer kernel's
 /// half-height over the gathering radius (0.2 and 0.5 measured the same on the slab;
-/// docs/vpm-convergence.md).
+/// docs/notes/2026-12-02-vpm-convergence.md).
 pub const DEFAULT_LAYER: f64 = 0.3;
 
 /// Default of [`Settings::kernel_clip`] (`VpmParams::clip`): on. On Fig. 3 it lowers the
 /// bias of averaged passes from 3.9 % to 2.8 % (rms over the image) for about 25 % more
-/// camera time (docs/vpm-convergence.md).
+/// camera time (docs/notes/2026-12-02-vpm-convergence.md).
 pub const DEFAULT_CLIP: bool = true;
 
 /// Which integrator renders the band.
@@ -226,7 +226,7 @@ impl Settings {
     /// surface estimate in `vpm` the direct light is traced by shadow rays, so the map
     /// carries only the indirect part and its noise is small beside a volume estimate's
     /// (k photons each); fewer photons shrink its radius, and with it the bias where the
-    /// disc reaches past a surface's edge, at a cheaper query (docs/bre.md).
+    /// disc reaches past a surface's edge, at a cheaper query (docs/notes/2026-12-06-bre.md).
     pub fn surface_photons_k(&self) -> usize {
         self.surface_k.unwrap_or(self.k)
     }

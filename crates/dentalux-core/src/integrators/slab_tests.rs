@@ -65,7 +65,7 @@ fn same_seed_same_numbers_for_any_thread_count() {
 }
 
 /// Non-scattering, non-absorbing slab: two incoherent Fresnel surfaces give
-/// R = r + (1−r)² r / (1 − r²) (tooth-optics.md §7: 0.10853 for n = 1.63).
+/// R = r + (1−r)² r / (1 − r²) (docs/explanation/tooth-optics.md §7: 0.10853 for n = 1.63).
 #[test]
 fn clear_slab_matches_two_surface_fresnel() {
     for est in [Estimator::Analog, Estimator::Weighted] {

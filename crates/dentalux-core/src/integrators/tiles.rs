@@ -58,7 +58,7 @@ impl Totals {
 /// seed walks on along one randomly rotated R2 sequence per pixel, so N averaged passes
 /// stratify the pixel like one render with N · spp samples: on Fig. 3 the pixel footprint
 /// (checker edges, rims) is most of the camera pass's noise, and independent rotations per
-/// pass left it falling only as 1/N (docs/vpm-convergence.md). Each sample is
+/// pass left it falling only as 1/N (docs/notes/2026-12-02-vpm-convergence.md). Each sample is
 /// still uniform over its pixel, so every pass stays unbiased on its own.
 ///
 /// [`pass_seed`]: crate::rng::pass_seed

@@ -27,7 +27,7 @@
 //! | `light_strata` (VpmParams only) | 3 | an area light's direct light on a surface: 3 × 3 stratified samples |
 //! | `map_threshold` (VpmParams only) | 0.3 | in [`march_points`]' count: a step whose eye transmittance T is below this counts T / 0.3 |
 //!
-//! Noise and speed on the Fig. 3 scene: docs/vpm-convergence.md ("Camera-pass noise and
+//! Noise and speed on the Fig. 3 scene: docs/notes/2026-12-02-vpm-convergence.md ("Camera-pass noise and
 //! speed"), measured by the ignored test `fig3_noise_budget`.
 
 use crate::control::Control;
@@ -66,7 +66,7 @@ const SINGLE_SAMPLES: u32 = 8;
 /// evaluate, rounded, at least 2, where a step whose transmittance from the eye T is below
 /// `threshold` counts T / `threshold` (the steps' own sampling before transmittance
 /// stratification; each stratified point counts about twice: Fig. 3's discs showed less
-/// noise with 2 points than with the 4.3 such steps, docs/vpm-convergence.md). So the step
+/// noise with 2 points than with the 4.3 such steps, docs/notes/2026-12-02-vpm-convergence.md). So the step
 /// sets how finely an optically thin segment is sampled along its length.
 pub fn march_points(sigma_t: f64, t_end: f64, step: f64, threshold: f64) -> u32 {
     let n = (t_end / step).ceil().max(1.0);

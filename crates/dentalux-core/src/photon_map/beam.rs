@@ -12,7 +12,7 @@
 //!
 //! One radius per medium, fixed (per-photon radii from the k-th neighbour distance,
 //! Jarosz 2008's choice, measured noisier on the Fig. 3 discs at the same cost:
-//! docs/bre.md). The query walks the photon map's own implicit kd-tree, each cell's box grown
+//! docs/notes/2026-12-06-bre.md). The query walks the photon map's own implicit kd-tree, each cell's box grown
 //! by the radius, so the estimate needs no memory beyond the map. Hand-written because the
 //! photons already sit in that tree: a BVH library (`bvh`, `parry`) would keep its own
 //! nodes and boxes, ≥ 32 bytes per photon more, against the 100 M photons in 3 GB target.
@@ -32,7 +32,7 @@
 //!
 //! with no blur in depth and, by a flat face, no kernel outside the medium. The photons are
 //! those of one medium on the inner side of both faces. Faces standing beside the ray (a
-//! disc's rim) are not clipped: docs/bre.md measures the bias there.
+//! disc's rim) are not clipped: docs/notes/2026-12-06-bre.md measures the bias there.
 
 use super::kernel::{inside_planes, rotated_circle, KernelClip, CLIP_RAYS};
 use super::tree::{Photon, PhotonMap, LEAF};

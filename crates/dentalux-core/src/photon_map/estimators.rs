@@ -113,7 +113,7 @@ impl PhotonMap {
     /// [`radius_query_k`]`(k)`. The kernel gathers its photons itself (a box walk), so the
     /// k-NN query only sets the radius, and a query for fewer photons costs less: on the
     /// Fig. 3 discs at 512 × 384, k 200, 4 M photons, the camera pass took 0.86× the time
-    /// with k_r = 50 (docs/bre.md). The k_r-th photon (on the query's sphere) is left out,
+    /// with k_r = 50 (docs/notes/2026-12-06-bre.md). The k_r-th photon (on the query's sphere) is left out,
     /// which keeps the estimate unbiased for a uniform density: given that sphere, the other
     /// k_r − 1 photons are uniform inside it and the rest a Poisson process outside.
     #[allow(clippy::too_many_arguments)]
@@ -157,7 +157,7 @@ impl PhotonMap {
     /// the density is fitted as ρ₀ + γ z from the moments Σ w, Σ w z of the phase-weighted
     /// photons against the cut cylinder's A (b − a), A (b² − a²)/2, A (b³ − a³)/3 and ρ₀
     /// reported: exact for a density linear in depth, and the plain mean where nothing cuts
-    /// the kernel. Measured against the slab simulator and `volpath`: docs/vpm-convergence.md.
+    /// the kernel. Measured against the slab simulator and `volpath`: docs/notes/2026-12-02-vpm-convergence.md.
     #[allow(clippy::too_many_arguments)]
     pub fn volume_layer_at_radius(
         &self,

@@ -40,7 +40,7 @@ pub(super) const CLIP_RAYS: usize = 8;
 /// to the kernel's axis (a disc's side wall seen from its top, or its top seen from the
 /// side wall), over the volume (512 points) otherwise. The depth fit then uses them. (A fit
 /// linear in all three directions, towards the wall as well, measured the same on Fig. 3:
-/// docs/vpm-convergence.md.) Where no face is met, the kernel keeps its exact moments.
+/// docs/notes/2026-12-02-vpm-convergence.md.) Where no face is met, the kernel keeps its exact moments.
 #[derive(Clone, Copy)]
 pub struct KernelClip<'a> {
     /// The first surface on the segment from a point along a unit direction within a
