@@ -10,6 +10,7 @@ from dentalux.cli import demo, slab
 from dentalux.cli import design as design_cli
 from dentalux.cli import figures as figures_cli
 from dentalux.cli import fit as fit_cli
+from dentalux.cli import guides as guides_cli
 from dentalux.cli import instruments as instruments_cli
 from dentalux.cli import materials as materials_cli
 from dentalux.cli import plot as plot_cli
@@ -40,3 +41,4 @@ scene_cli.register(app)
 version_cli.register(app)
 report_cli.register(app)
 design_cli.register(app)
+guides_cli.register(app)

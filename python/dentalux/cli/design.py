@@ -14,7 +14,8 @@ from dentalux.strict_json import dumps_checked
 
 
 def design_command(
-    target: str = typer.Option(..., help="lab:L,a,b | GUIDE:TAB (e.g. vita-classical:A2) | "
+    target: str = typer.Option(..., help="lab:L,a,b | GUIDE:TAB (e.g. vita-classical:A2, or "
+                               "a guide from `dentalux guides import`) | FILE.csv:TAB | "
                                "stack:MATERIAL:MM/MATERIAL:MM/..."),
     layer: list[str] = typer.Option(..., help="MATERIAL:MIN-MAX [mm], top to bottom; "
                                     "repeat for 1 to 3 layers (with --evaluate the range "
@@ -92,8 +93,10 @@ def design_command(
                                                repeats=render_repeats, seed=seed,
                                                threads=threads,
                                                progress=False if as_json else None)
+    guide_note = _guide_instrument(res)
     if as_json:
         out = {**res.to_json(), **_setup_json(res, layer, cement)}
+        out.update(guide_note)
         if rendered is not None:
             out["render"] = _render_json(rendered)
         print(dumps_checked(out, "design"))
@@ -103,6 +106,8 @@ def design_command(
                                res.instrument["name"]))
     if note:
         console.print(f"note: {note}")
+    elif guide_note and guide_note["target_instrument"]["note"]:
+        console.print(f"note: {guide_note['target_instrument']['note']}")
     console.print(f"search {res.search_seconds:.1f} s, verification {res.verify_seconds:.1f} s")
     if plot:
         console.print(f"plot: {plot}")
@@ -195,6 +200,18 @@ def _evaluate(target, layer, evaluate, total, substrate, cement, instrument, tar
                                res.instrument["name"], evaluated=True))
     console.print(f"{len(res.evaluated)} read in {res.seconds:.1f} s, "
                   f"{res.photons_per_band} photons per band")
+
+
+def _guide_instrument(res) -> dict:
+    """``target_instrument``: a guide target's instrument against the design's (a note
+    when they differ); empty for other targets."""
+    from dentalux import shade_guides
+
+    src = res.target.source or {}
+    if src.get("kind") != "shade-guide":
+        return {}
+    return shade_guides.instrument_note(src["guide"], res.instrument["name"],
+                                        key="target_instrument")
 
 
 def _render_json(report: dict) -> dict:

@@ -48,13 +48,79 @@ def write_checked_spectrum(results, out: Path, name: str, **kw) -> None:
                              f"material ({msg}); nothing was written") from None
 
 
+def _fit_readings(readings_path: Path, instrument_name, g, n, model, photons, seed, out, name,
+                  as_json: bool) -> None:
+    """``fit --readings``: a material from instrument readings (dentalux.inverse.readings_fit)."""
+    from dentalux import instrument, materials, readings
+    from dentalux.inverse import readings_fit
+
+    if model not in readings_fit.MODELS:
+        raise ValueError(f"--model = {model!r}: with --readings allowed "
+                         f"{', '.join(readings_fit.MODELS)}")
+    if instrument_name is None:
+        raise ValueError("--readings needs --instrument NAME|FILE.toml (the instrument that "
+                         "read them; `dentalux instruments list`)")
+    if out is None:
+        raise ValueError("--readings needs --out MATERIAL.toml")
+    out = check_out_file(out, "--out", (".toml",))
+    if photons is not None:
+        limits.check_count(photons, "--photons", limits.MAX_FIT_PHOTONS, lo=1000)
+    inst = instrument.get(instrument_name)
+    data = readings.load(readings_path)
+    name = name or out.stem
+    res = readings_fit.fit(data, inst, g=g, n=n, model=model,
+                           photons=photons or readings_fit.DEFAULT_PHOTONS, seed=seed)
+    doc = readings_fit.material_doc(res, data, inst, name)
+    import tomli_w
+
+    with atomic_file(out, "--out") as tmp:
+        tmp.write_bytes(tomli_w.dumps(doc).encode())
+        try:
+            materials.load(tmp)
+        except ValueError as exc:
+            msg = str(exc).replace(str(tmp), str(out))
+            raise ValueError(f"--out = '{out}': the fitted material would not load ({msg}); "
+                             "nothing was written") from None
+    for w in res.warnings:
+        Console(stderr=True).print(f"warning: {w}")
+    if as_json:
+        print(dumps_strict({
+            "material": name, "file": str(out),
+            "residuals": [{k: r[k] for k in ("thickness_mm", "backing", "delta_e00")}
+                          for r in res.residuals],
+            "identifiable": res.identifiable, "model": res.model}))
+        return
+    table = Table(title=f"{name}: {res.model} fit to {readings_path} read with {inst.name} "
+                        f"(g {res.g:g}, n {res.n:g}; {res.seconds:.1f} s)")
+    for col in ("line", "thickness [mm]", "backing", "measured L*a*b*", "predicted L*a*b*",
+                "ΔE00", "MC s.e. ΔE00"):
+        table.add_column(col, justify="right")
+    for r in res.residuals:
+        table.add_row(str(r["line"]), f"{r['thickness_mm']:g}", str(r["backing"]),
+                      " ".join(f"{x:.2f}" for x in r["measured_lab"]),
+                      " ".join(f"{x:.2f}" for x in r["predicted_lab"]),
+                      f"{r['delta_e00']:.3f}", f"{r['mc_stderr_de00']:.3f}")
+    table.caption = (f"identifiable: {res.identifiable} ({res.identifiability}); "
+                     + "; ".join(f"{k} {v}" for k, v in res.assumed.items()))
+    Console().print(table)
+    Console().print(f"wrote {out}")
+
+
 def fit_command(
     tt: float = typer.Option(None, help="total transmittance (fraction)"),
     tr: float = typer.Option(None, help="total reflectance (fraction, specular included)"),
     n: float = typer.Option(None, help="refractive index of the sample (>= 1)"),
     g: float = typer.Option(None, help="HG anisotropy, in (-1, 1)"),
     thickness: float = typer.Option(None, help="sample thickness [mm]"),
-    model: str = typer.Option("mc", help="forward model: mc | ad | telegrapher | km"),
+    model: str = typer.Option("mc", help="forward model: mc | ad | telegrapher | km (with "
+                              "--readings: mc, through the instrument, or km, Kubelka-Munk "
+                              "with the Saunderson correction)"),
+    readings_path: Path = typer.Option(
+        None, "--readings", help="CSV of instrument readings: thickness_mm, backing "
+        "(black|white|reflectance), L,a,b or r400...r700 [, sd_*] (docs/fitting.md)"),
+    instrument_name: str = typer.Option(
+        None, "--instrument", help="with --readings: the instrument that read them (preset "
+        "name or TOML file)"),
     fd: float = typer.Option(0.0, help="isotropic fraction of eq. 10, in [0, 1]"),
     n_outside: float = typer.Option(1.0, "--n-outside", help="refractive index around it"),
     tr_diffuse_only: bool = typer.Option(
@@ -63,17 +129,32 @@ def fit_command(
     tr_err: float = typer.Option(0.005, help="absolute uncertainty of TR"),
     tol: float = typer.Option(None, help="fit tolerance on TT/TR (default 0.001 for mc)"),
     photons: int = typer.Option(
-        400_000, help=f"photons per Monte Carlo evaluation (mc; 1000 ... "
-                      f"{limits.MAX_FIT_PHOTONS:.0e})"),
+        None, help=f"photons per Monte Carlo evaluation (mc; 1000 ... "
+                   f"{limits.MAX_FIT_PHOTONS:.0e}; default 400 000, with --readings 20 000 "
+                   "per band)"),
     seed: int = typer.Option(1, help="random seed of the Monte Carlo evaluations (mc)"),
     table: Path = typer.Option(None, help="CSV: wavelength_nm,tt,tr,n,g,thickness_mm[,fd,...]"),
     out: str = typer.Option(
-        None, help="material spectrum TOML to write (with --table; replaced if it exists)"),
+        None, help="material TOML to write (with --table or --readings; replaced if it "
+                   "exists)"),
     name: str = typer.Option(None, help="material name in the TOML (default: file stem)"),
     description: str = typer.Option("", help="material description in the TOML"),
     as_json: bool = typer.Option(False, "--json", help="print JSON"),
 ) -> None:
-    """Find μa and μs [1/mm] from total transmittance and reflectance of a disc."""
+    """Find μa and μs [1/mm] from total transmittance and reflectance of a disc, or
+    (--readings) a material from an instrument's readings over black and white."""
+    if readings_path is not None:
+        given = [k for k, v in (("tt", tt), ("tr", tr), ("thickness", thickness),
+                                ("table", table)) if v is not None]
+        if given:
+            raise ValueError(f"--readings reads thickness and backing per row; drop --"
+                             f"{', --'.join(given)}")
+        _fit_readings(readings_path, instrument_name, g, n, model, photons, seed, out, name,
+                      as_json)
+        return
+    if instrument_name is not None:
+        raise ValueError("--instrument goes with --readings")
+    photons = 400_000 if photons is None else photons
     if model == "mc":
         limits.check_count(photons, "--photons", limits.MAX_FIT_PHOTONS, lo=1000)
     if out is not None:

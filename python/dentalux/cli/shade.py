@@ -6,7 +6,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from dentalux import dental, instrument
+from dentalux import dental, instrument, readings, shade_guides
 from dentalux.cli import measure_options as mo
 from dentalux.cli.measure_options import DEFAULTS
 from dentalux.outputs import dumps_strict
@@ -30,7 +30,8 @@ def shade_command(
     backing_white: mo.BackingWhite = None,
     contact: mo.Contact = None,
     match: str = typer.Option(None, help="report the nearest tabs of a shade guide: "
-                              "vita-classical | vita-3d-master"),
+                              "vita-classical | vita-3d-master | an imported guide "
+                              "(`dentalux guides list`) | a guide FILE.csv"),
     layer: list[str] = typer.Option(None, help="MATERIAL:THICKNESS, repeated top to bottom: "
                                     "a layered specimen instead of MATERIAL"),
     substrate: str = typer.Option(None, help="substrate under the --layer stack "
@@ -43,9 +44,14 @@ def shade_command(
     illuminant: mo.Illuminant = DEFAULTS["illuminant"],
     threads: mo.Threads = None,
     as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
+    readings_out: str = typer.Option(
+        None, "--readings-out", help="write the reading over black and white as a readings "
+        "file (CSV) for `dentalux fit --readings`; an existing readings file gains the rows"),
 ) -> None:
     """CIELAB over black/white and in transmission, TP, TP00, CR, OP as an instrument reads
     them (and ΔE00 vs --against, the nearest shade tabs with --match)."""
+    if readings_out:
+        readings.check_out(readings_out)
     inst = instrument.get(instrument_name).override(
         illuminated_diameter_mm=illuminated_diameter, viewed_diameter_mm=viewed_diameter,
         geometry=geometry)
@@ -72,6 +78,12 @@ def shade_command(
     out = dental.shade(material, thickness, against=against, instrument=inst, match=match,
                        specimen=specimen, **kw)
     check_finite(out, "shade")  # a NaN or inf reading is an error, never printed
+    if match:
+        out.update(shade_guides.instrument_note(match, inst))
+    if readings_out:
+        total = sum(t for _, t in specimen) if specimen else thickness
+        readings.write(readings_out, out, total, comment=readings.comment_from_shade(
+            out, material if specimen is None else out.get("layers"), photons, seed))
     if as_json:
         print(dumps_strict(out))
         return
@@ -103,6 +115,8 @@ def shade_command(
         table.add_row("ΔTP00", f"{m['delta_tp00']:.3f}")
     for row in m.get("shade_match", [])[:3]:
         table.add_row(f"{match} {row['tab']}", f"ΔE00 {row['delta_e00']:.2f}")
+    if m.get("shade_match_instrument", {}).get("note"):
+        table.add_row("  guide instrument", m["shade_match_instrument"]["note"])
     photons_line = f"{m['photons']} photons, {m['cpu_seconds']:.1f} CPU-s"
     if "precision" in m:
         p = m["precision"]

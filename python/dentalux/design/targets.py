@@ -5,7 +5,8 @@ Target strings (``dentalux design --target``):
 - ``lab:L,a,b`` — explicit CIELAB values (a measured tooth, a tab the user measured);
 - ``GUIDE:TAB`` — a tab of a shade guide in ``data/shade_guides.csv``
   (``vita-classical:A2``, ``vita-3d-master:2M2``); refused, naming the tab, when the table
-  holds no published values for it (:func:`dentalux.shade_guides.lab`);
+  holds no published values for it (:func:`dentalux.shade_guides.lab`); or of a guide the
+  lab imported (``dentalux guides import``), or ``FILE.csv:TAB`` of a guide file;
 - ``stack:MATERIAL:MM[/MATERIAL:MM...]`` — a tooth region given as a layered specimen (top
   to bottom, e.g. ``stack:enamel:1.0/dentin:2.5``), read by the Monte Carlo slab through
   the design's instrument: its colour over the white backing becomes the target.
@@ -132,6 +133,8 @@ def _parse(target, tp, read) -> Target:
         return Target(check_lab(target), tp, {"kind": "lab", "status": "given"})
     text = target.strip()
     kind, sep, rest = text.partition(":")
+    if ".csv:" in text.lower():  # FILE.csv:TAB, a path may hold ':' itself
+        kind, sep, rest = text.rpartition(":")
     if not sep or not rest:
         raise ValueError(f"target = {target!r}: expected lab:L,a,b, GUIDE:TAB (e.g. "
                          "vita-classical:A2) or stack:MATERIAL:MM[/MATERIAL:MM...]")
@@ -159,10 +162,11 @@ def _parse(target, tp, read) -> Target:
     from dentalux import shade_guides
 
     guide, tab = kind, rest
-    if guide not in shade_guides.guides():
+    if not shade_guides.is_guide(guide):
         raise ValueError(f"target = {target!r}: {guide!r} is neither lab, stack nor a shade "
-                         f"guide: allowed lab:L,a,b, stack:MATERIAL:MM/..., or GUIDE:TAB with "
-                         f"GUIDE one of {', '.join(shade_guides.guides())}")
+                         f"guide: allowed lab:L,a,b, stack:MATERIAL:MM/..., GUIDE:TAB with "
+                         f"GUIDE one of {', '.join(shade_guides.guides())}, or FILE.csv:TAB "
+                         "(a guide file)")
     row = shade_guides.tab(guide, tab)  # unknown tab: ValueError naming the allowed ones
     lab = check_lab(shade_guides.lab(guide, tab), f"target {guide}:{tab}")
     return Target(lab, tp, {"kind": "shade-guide", **row.source()})

@@ -1,0 +1,592 @@
+"""Fit μa(λ), μs(λ) of a material to a lab's instrument readings (``dentalux fit --readings``).
+
+Two forward models of the same readings (:mod:`dentalux.readings`):
+
+- ``mc``: the reading engine (:func:`dentalux.dental.read`) through the instrument model,
+  edge loss included. Every evaluation uses the same seed (common random numbers), so the
+  Monte Carlo noise is a fixed, smooth error of the model rather than a jitter that stalls
+  the optimiser; it is reported beside the residuals (``mc_stderr_de00``).
+- ``km``: Kubelka–Munk with the Saunderson correction, the field's baseline. A disc of
+  thickness X on a backing of reflectance R_g has, with a = 1 + K/S, b = sqrt(a² − 1),
+  R = (1 − R_g (a − b coth bSX)) / (a − R_g + b coth bSX) inside its faces; the faces add
+  R_m = k1 + (1 − k1)(1 − k2) R / (1 − k2 R) (k1 the normal Fresnel reflectance, counted
+  only where the geometry includes the specular reflection; k2 the diffuse internal
+  reflectance, :func:`dentalux.inverse.models.boundary.moments`). The backing's R_g is the
+  instrument's, used as it is. K and S map to the transport coefficients as in
+  :mod:`dentalux.inverse.models.km`: K = 2 μa, S = (3/4) μs (1 − g). Kubelka–Munk knows no
+  window, so it ignores edge loss.
+
+Parameters: for spectral readings, log μa and log μs per band (the bands are independent,
+so one perturbed evaluation gives every band's derivative); for CIELAB-only readings a smooth
+five-parameter spectrum, log μa(λ) = c0 + c1 x + c2 x², log μs(λ) = s0 − b ln(λ/550 nm),
+x = (λ − 550 nm)/100 nm, fitted on :data:`LAB_BANDS`. Levenberg–Marquardt with
+finite-difference Jacobians, started from the Kubelka–Munk fit. The uncertainty of each
+parameter comes from the Jacobian with the readings' sd (or :data:`DEFAULT_SD`) and the Monte
+Carlo standard error; a parameter whose standard deviation in log exceeds
+:data:`PINNED_SD` is not pinned by the readings, and one thickness over one backing never
+pins both coefficients (``identifiable`` false).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dentalux.color import delta_e00, delta_e00_scale, system
+from dentalux.inverse.models.boundary import moments, specular
+from dentalux.readings import Readings
+from dentalux.spectra import Reconstruction
+
+MODELS = ("mc", "km")
+#: g and n when the user gives none: typical of resin composites and glass ceramics
+#: (n 1.50-1.55; g of filled resins 0.6-0.8 in the inverse-adding-doubling literature)
+ASSUMED_G, ASSUMED_N = 0.6, 1.5
+#: the spread assumed for a reading without sd columns: instrument repeatability
+DEFAULT_SD = {"spectral": 0.003, "lab": 0.3}
+#: bands on which a CIELAB-only fit evaluates its smooth spectrum [nm]
+LAB_BANDS = tuple(float(w) for w in range(380, 781, 20))
+#: bands written to the material file of a CIELAB-only fit [nm]
+LAB_OUT_BANDS = tuple(float(w) for w in range(380, 781, 20))
+LAB_PARAMS = ("log_mua_550", "mua_slope", "mua_curvature", "log_mus_550", "mus_power")
+#: a parameter is pinned by the readings when its standard deviation (in log for the
+#: coefficients) is below this (a factor of about 1.65)
+PINNED_SD = 0.5
+#: bounds of log μa and log μs [1/mm]
+LOG_BOUNDS = (math.log(1e-6), math.log(1e3))
+#: finite-difference step in log: large enough to rise above the Monte Carlo noise that
+#: common random numbers leave, small against the curvature of a reading in log μ
+TABLE_STEP, KM_STEP = 1e-3, 1e-4
+DEFAULT_PHOTONS = 20_000
+DEFAULT_ITERATIONS = {"table": 40, "km": 60}
+#: the Monte Carlo model's table: nodes in (log μa, log μs), and how far it reaches beyond
+#: the Kubelka-Munk fit (in log: μa down 100x, up 3x, as edge loss makes Kubelka-Munk
+#: over-estimate absorption; μs 5x either way)
+TABLE_NODES = (12, 10)
+TABLE_SPAN = {"mua": (math.log(100.0), math.log(3.0)), "mus": (math.log(3.0), math.log(3.0))}
+#: the table's photons per node, as a fraction of the fit's photons: the defect correction
+#: reads the fit itself with all of them, so the table needs to be right in slope only
+TABLE_PHOTON_FRACTION = 0.5
+#: defect corrections: the table fit is read by Monte Carlo at the fitted coefficients and
+#: the difference moves the target of the next table fit
+CORRECTIONS = 3
+#: a residual above this (ΔE00) gets a warning: the model cannot reproduce the reading
+WARN_RESIDUAL = 2.0
+
+
+@dataclass
+class ReadingsFit:
+    """The fitted coefficients at :attr:`wavelength_nm`, with residuals and diagnostics."""
+
+    model: str
+    wavelength_nm: np.ndarray
+    mua: np.ndarray
+    mus: np.ndarray
+    mua_ci: np.ndarray
+    mus_ci: np.ndarray
+    g: float
+    n: float
+    assumed: dict
+    residuals: list[dict]
+    identifiable: bool
+    identifiability: str
+    pinned: dict
+    seconds: float
+    evaluations: int
+    photons: int = 0
+    seed: int = 1
+    warnings: list[str] = field(default_factory=list)
+    mc_stderr_de00: float = 0.0
+    cpu_seconds: float = 0.0
+
+
+# --- forward models -----------------------------------------------------------------------
+
+
+def km_reflectance(mua, mus, g: float, n: float, thickness, rg, k1: float):
+    """Kubelka–Munk + Saunderson reflectance of a disc on a backing (module doc); arrays
+    broadcast."""
+    k = 2.0 * np.asarray(mua, dtype=float)
+    s = np.maximum(0.75 * np.asarray(mus, dtype=float) * (1.0 - g), 1e-12)
+    a = 1.0 + k / s
+    b = np.sqrt(np.maximum(a * a - 1.0, 0.0))
+    bsx = np.maximum(b * s * thickness, 1e-12)
+    # b coth(bSX), with its limit 1/(SX) as b -> 0 (no absorption)
+    bcoth = np.where(b * s * thickness < 1e-8, 1.0 / (s * thickness),
+                     b / np.tanh(np.minimum(bsx, 300.0)))
+    r = (1.0 - rg * (a - bcoth)) / (a - rg + bcoth)
+    k2 = moments(n, 1.0)[0]
+    return k1 + (1.0 - k1) * (1.0 - k2) * r / (1.0 - k2 * r)
+
+
+class _Problem:
+    """The readings, the instrument and one forward model: spectra of every reading."""
+
+    def __init__(self, readings: Readings, inst, g, n, model, photons, seed, bands):
+        self.r, self.inst, self.g, self.n = readings, inst, g, n
+        self.model, self.photons, self.seed = model, photons, seed
+        self.bands = np.asarray(bands, dtype=float)
+        self.cs = system(readings.illuminant, str(readings.observer))
+        self.rec = Reconstruction(self.bands, grid=self.cs.wavelengths, basis="hold")
+        self.k1 = 0.0 if inst.spec.specular == "excluded" else specular(n, 1.0)
+        self.evaluations = 0
+        self.mc_calls = 0
+        self.cpu_seconds = 0.0
+        self.defect = 0.0
+        # each reading -> (thickness, the pair of backings read together, slot 0|1)
+        self.calls: dict = {}
+        self.slot = []
+        for t in sorted({row.thickness_mm for row in readings.rows}):
+            backs = []
+            for row in readings.rows:
+                if row.thickness_mm == t and row.backing not in backs:
+                    backs.append(row.backing)
+            for i in range(0, len(backs), 2):
+                self.calls[(t, i // 2)] = backs[i:i + 2]
+        for row in readings.rows:
+            for key, pair in self.calls.items():
+                if key[0] == row.thickness_mm and row.backing in pair:
+                    self.slot.append((key, pair.index(row.backing)))
+                    break
+
+    def rg(self, backing) -> np.ndarray:
+        from dentalux.dental import backing_spectrum
+
+        value = getattr(self.inst, f"backing_{backing}") if isinstance(backing, str) else backing
+        return backing_spectrum(value, self.bands, "backing")
+
+    def material(self, bands, mua, mus):
+        from dentalux.materials import Material
+
+        bands = np.asarray(bands, float)
+        return Material(name="fit", wavelength_nm=bands, mua=np.asarray(mua, float),
+                        mus=np.asarray(mus, float), g=np.full(bands.size, self.g),
+                        fd=np.zeros(bands.size), n=np.full(bands.size, self.n),
+                        provenance={"kind": "fitted", "source": "dentalux fit --readings"})
+
+    def read(self, bands, mua, mus) -> dict:
+        """One Monte Carlo reading per (thickness, pair of backings) call, at ``bands``."""
+        from dentalux import dental
+
+        mat = self.material(bands, mua, mus)
+        got = {}
+        for key, pair in self.calls.items():
+            over = {}
+            for j, b in enumerate(pair):
+                slot = ("backing_black", "backing_white")[j]
+                if not isinstance(b, str):
+                    over[slot] = b
+                elif b != ("black", "white")[j]:
+                    over[slot] = getattr(self.inst, f"backing_{b}")
+            got[key] = dental.read([(mat, key[0])], bands=np.asarray(bands).tolist(),
+                                   instrument=self.inst, photons=self.photons, seed=self.seed,
+                                   progress=False, illuminant=self.r.illuminant,
+                                   observer=self.r.observer, **over)
+            self.cpu_seconds += got[key].cpu_seconds
+        return got
+
+    def spectra(self, mua, mus):
+        """(readings, bands) reflectances and their Monte Carlo standard errors (plus the
+        defect correction of the table model)."""
+        self.evaluations += 1
+        if self.model == "km":
+            out = np.array([km_reflectance(mua, mus, self.g, self.n, row.thickness_mm,
+                                           self.rg(row.backing), self.k1)
+                            for row in self.r.rows])
+            return out, np.zeros_like(out)
+        if self.model == "table":
+            pts = np.column_stack([np.log(mua), np.log(mus)])
+            pts = np.clip(pts, self.table_lo, self.table_hi)
+            vals = np.array([self.tables[(key, j)].ev(pts[:, 0], pts[:, 1])
+                             for key, j in self.slot])
+            errs = np.array([self.table_err[(key, j)].ev(pts[:, 0], pts[:, 1])
+                             for key, j in self.slot])
+            return vals + self.defect, np.abs(errs)
+        self.mc_calls += 1
+        got = self.read(self.bands, mua, mus)
+        vals, errs = [], []
+        for key, j in self.slot:
+            name = ("over_black", "over_white")[j]
+            vals.append(got[key].spectra[name])
+            errs.append(got[key].spectra[f"{name}_stderr"])
+        return np.asarray(vals), np.asarray(errs)
+
+    def build_table(self, log_mua_range, log_mus_range, nodes):
+        """The table model: every (thickness, backing pair) read once over a grid of
+        (log μa, log μs) nodes, each node a band of one Monte Carlo reading (the reading
+        of a band depends on the band only through the material; backings and n are the
+        same in every band). Cubic interpolation between nodes."""
+        from scipy.interpolate import RectBivariateSpline
+
+        la = np.linspace(*log_mua_range, nodes[0])
+        ls = np.linspace(*log_mus_range, nodes[1])
+        a, s = np.meshgrid(la, ls, indexing="ij")
+        fake = 380.0 + 0.1 * np.arange(a.size)  # node k is read as band 380 + 0.1 k nm
+        full, self.photons = self.photons, max(1000, int(self.photons * TABLE_PHOTON_FRACTION))
+        try:
+            got = self.read(fake, np.exp(a.ravel()), np.exp(s.ravel()))
+        finally:
+            self.photons = full
+        self.tables, self.table_err = {}, {}
+        for key in self.calls:
+            for j, name in enumerate(("over_black", "over_white")):
+                v = np.asarray(got[key].spectra[name]).reshape(a.shape)
+                e = np.asarray(got[key].spectra[f"{name}_stderr"]).reshape(a.shape)
+                # a smoothing spline: its squared misfit at the nodes is about the nodes'
+                # summed Monte Carlo variance, so it follows the surface, not the noise
+                self.tables[(key, j)] = RectBivariateSpline(la, ls, v, kx=3, ky=3,
+                                                            s=float(np.sum(e * e)))
+                self.table_err[(key, j)] = RectBivariateSpline(la, ls, e, kx=1, ky=1)
+        self.table_lo = np.array([la[0], ls[0]])
+        self.table_hi = np.array([la[-1], ls[-1]])
+        self.defect = 0.0
+        self.model = "table"
+
+    def lab(self, spectra):
+        return self.cs.XYZ_to_Lab(self.cs.grid_to_XYZ(self.rec(np.asarray(spectra))))
+
+
+# --- parametrisations ---------------------------------------------------------------------
+
+
+def _lab_spectrum(theta, bands):
+    """The smooth CIELAB-only spectrum (module doc): theta (..., 5) -> mua, mus (..., bands)."""
+    x = (np.asarray(bands) - 550.0) / 100.0
+    t = np.asarray(theta)
+    log_mua = t[..., 0:1] + t[..., 1:2] * x + t[..., 2:3] * x * x
+    log_mus = t[..., 3:4] - t[..., 4:5] * np.log(np.asarray(bands) / 550.0)
+    return (np.exp(np.clip(log_mua, *LOG_BOUNDS)), np.exp(np.clip(log_mus, *LOG_BOUNDS)))
+
+
+class _Spectral:
+    """Per-band parameters: theta (bands, 2) = log μa, log μs; residuals (bands, readings)."""
+
+    def __init__(self, prob: _Problem):
+        self.p = prob
+        rows = prob.r.rows
+        self.meas = np.array([r.spectrum for r in rows])
+        sd = np.array([r.sd_spectrum if r.sd_spectrum is not None
+                       else np.full(len(prob.bands), DEFAULT_SD["spectral"]) for r in rows])
+        self.sd = np.maximum(sd, 1e-4)
+
+    def coefficients(self, theta):
+        return np.exp(theta[:, 0]), np.exp(theta[:, 1])
+
+    def residuals(self, theta):
+        pred, err = self.p.spectra(*self.coefficients(theta))
+        sigma = np.sqrt(self.sd ** 2 + err ** 2)
+        return ((pred - self.meas) / sigma).T, pred, err
+
+
+class _Lab:
+    """Five smooth-spectrum parameters in one block; residuals in L*, a*, b* per reading."""
+
+    def __init__(self, prob: _Problem):
+        self.p = prob
+        rows = prob.r.rows
+        self.meas = np.array([r.lab for r in rows])
+        sd = np.array([r.sd_lab if r.sd_lab is not None else (DEFAULT_SD["lab"],) * 3
+                       for r in rows])
+        self.sd = np.maximum(sd, 0.05)
+
+    def coefficients(self, theta):
+        return _lab_spectrum(theta[0], self.p.bands)
+
+    def residuals(self, theta):
+        pred, err = self.p.spectra(*self.coefficients(theta))
+        lab = self.p.lab(pred)
+        # the Monte Carlo error of each L*, a*, b*, to first order through the reconstruction
+        lab_err = np.abs(self.p.lab(pred + err) - lab)
+        sigma = np.sqrt(self.sd ** 2 + lab_err ** 2)
+        return ((lab - self.meas) / sigma).reshape(1, -1), pred, err
+
+
+# --- Levenberg–Marquardt over independent blocks -------------------------------------------
+
+
+def _bounds(theta_shape, form):
+    lo, hi = np.full(theta_shape, LOG_BOUNDS[0]), np.full(theta_shape, LOG_BOUNDS[1])
+    if form == "lab":
+        lo[:, [1, 2, 4]], hi[:, [1, 2, 4]] = -10.0, 10.0
+    return lo, hi
+
+
+def _jacobian(obj, theta, r0, step, lo, hi):
+    k = theta.shape[1]
+    jac = np.empty(r0.shape + (k,))
+    for j in range(k):
+        t = theta.copy()
+        h = np.where(theta[:, j] + step > hi[:, j], -step, step)
+        t[:, j] += h
+        jac[..., j] = (obj.residuals(t)[0] - r0) / h[:, None]
+    return jac
+
+
+def _lm(obj, theta, step, iterations, lo, hi, final_jacobian=True):
+    """Block Levenberg–Marquardt; returns theta, residuals, prediction, error, Jacobian."""
+    r, pred, err = obj.residuals(theta)
+    cost = np.sum(r * r, axis=1)
+    lam = np.full(theta.shape[0], 1e-2)
+    jac = None
+    for it in range(iterations):
+        jac = _jacobian(obj, theta, r, step, lo, hi)
+        jtj = np.einsum("bmi,bmj->bij", jac, jac)
+        jtr = np.einsum("bmi,bm->bi", jac, r)
+        damp = jtj + lam[:, None, None] * (np.eye(theta.shape[1]) * np.maximum(
+            np.diagonal(jtj, axis1=1, axis2=2)[:, :, None], 1e-9))
+        delta = -np.linalg.solve(damp, jtr[..., None])[..., 0]
+        delta = np.clip(delta, -2.0, 2.0)  # at most a factor e^2 a step
+        trial = np.clip(theta + delta, lo, hi)
+        r_t, pred_t, err_t = obj.residuals(trial)
+        cost_t = np.sum(r_t * r_t, axis=1)
+        better = cost_t < cost
+        theta = np.where(better[:, None], trial, theta)
+        r = np.where(better[:, None], r_t, r)
+        # the prediction is (readings, bands): per band for spectral blocks, whole otherwise
+        mask = better[None, :] if isinstance(obj, _Spectral) else better[0]
+        pred, err = np.where(mask, pred_t, pred), np.where(mask, err_t, err)
+        lam = np.where(better, lam / 5.0, lam * 10.0)
+        cost = np.where(better, cost_t, cost)
+        if it >= 1 and np.all(np.abs(delta) < 1e-3):
+            break
+    if jac is None or final_jacobian:  # at the fitted point (the last one is a step behind)
+        jac = _jacobian(obj, theta, r, step, lo, hi)
+    return theta, r, pred, err, jac
+
+
+# --- the fit ------------------------------------------------------------------------------
+
+
+def _start(form, prob_km, bands):
+    if form == "spectral":
+        return np.column_stack([np.full(len(bands), math.log(0.05)),
+                                np.full(len(bands), math.log(5.0))])
+    return np.array([[math.log(0.05), 0.0, 0.0, math.log(5.0), 1.0]])
+
+
+def fit(readings: Readings, instrument, g: float | None = None, n: float | None = None,
+        model: str = "mc", photons: int = DEFAULT_PHOTONS, seed: int = 1,
+        iterations: int | None = None) -> ReadingsFit:
+    """Fit a material to ``readings`` read by ``instrument`` (module doc)."""
+    from dentalux import instrument as instruments
+
+    if model not in MODELS:
+        raise ValueError(f"--model = {model!r}: allowed {', '.join(MODELS)}")
+    inst = instruments.get(instrument)
+    assumed = {}
+    if g is None:
+        g, assumed["g"] = ASSUMED_G, (f"assumed: {ASSUMED_G} (typical of filled resins and "
+                                      "glass ceramics; not given with --g)")
+    else:
+        assumed["g"] = f"assumed: {g:g}, given with --g"
+    if n is None:
+        n, assumed["n"] = ASSUMED_N, (f"assumed: {ASSUMED_N} (typical of composites and glass "
+                                      "ceramics; not given with --n)")
+    else:
+        assumed["n"] = f"assumed: {n:g}, given with --n"
+    if not -1.0 < g < 1.0:
+        raise ValueError(f"--g = {g!r} is out of range: allowed (-1, 1)")
+    if not 1.0 <= n <= 3.0:
+        raise ValueError(f"--n = {n!r} is out of range: allowed [1, 3]")
+    start = time.perf_counter()
+    form = readings.form
+    bands = readings.wavelength_nm if form == "spectral" else list(LAB_BANDS)
+    wrap = _Spectral if form == "spectral" else _Lab
+    # Kubelka–Munk first: the baseline, and the start of the Monte Carlo fit
+    km = _Problem(readings, inst, g, n, "km", photons, seed, bands)
+    obj = wrap(km)
+    theta = _start(form, km, bands)
+    lo, hi = _bounds(theta.shape, form)
+    theta, r, pred, err, jac = _lm(obj, theta, KM_STEP, DEFAULT_ITERATIONS["km"], lo, hi)
+    evaluations = km.evaluations
+    prob = km
+    edge_note = ""
+    if model == "mc":
+        prob = _Problem(readings, inst, g, n, "mc", photons, seed, bands)
+        mua0, mus0 = obj.coefficients(theta)
+        span_a = (max(math.log(float(np.min(mua0))) - TABLE_SPAN["mua"][0], LOG_BOUNDS[0]),
+                  min(math.log(float(np.max(mua0))) + TABLE_SPAN["mua"][1], LOG_BOUNDS[1]))
+        span_s = (max(math.log(float(np.min(mus0))) - TABLE_SPAN["mus"][0], LOG_BOUNDS[0]),
+                  min(math.log(float(np.max(mus0))) + TABLE_SPAN["mus"][1], LOG_BOUNDS[1]))
+        prob.build_table(span_a, span_s, TABLE_NODES)
+        obj = wrap(prob)
+        if form == "spectral":
+            lo[:, 0], hi[:, 0] = span_a
+            lo[:, 1], hi[:, 1] = span_s
+            theta = np.clip(theta, lo, hi)
+        its = DEFAULT_ITERATIONS["table"] if iterations is None else iterations
+        for _ in range(CORRECTIONS + 1):
+            theta, r, pred_t, err_t, jac = _lm(obj, theta, TABLE_STEP, its, lo, hi)
+            prob.model = "mc"  # the Monte Carlo reading at the fit, through the instrument
+            r, pred, err = obj.residuals(theta)
+            prob.model = "table"
+            # defect correction: the table's error at the fit moves the next fit's target
+            prob.defect = prob.defect + (pred - pred_t)
+        evaluations = prob.mc_calls
+        edge = []
+        if form == "spectral":
+            edge = [i for i in range(len(bands)) if np.any(np.isclose(theta[i], lo[i]))
+                    or np.any(np.isclose(theta[i], hi[i]))]
+        if edge:
+            edge_note = (f"the fit reached the edge of its table at {len(edge)} band(s) "
+                         f"({', '.join(f'{bands[i]:g}' for i in edge[:5])} nm)")
+        else:
+            edge_note = ""
+    # uncertainty of each parameter: (J^T J)^-1 with residuals in units of their sigma
+    jtj = np.einsum("bmi,bmj->bij", jac, jac)
+    cov = np.linalg.pinv(jtj)
+    sd = np.sqrt(np.clip(np.diagonal(cov, axis1=1, axis2=2), 0, None))
+    singular = np.linalg.cond(jtj) > 1e12
+    sd = np.where(singular[:, None], np.inf, sd)
+    conditions = readings.conditions()
+    if form == "spectral":
+        out_bands = np.asarray(bands, float)
+        mua, mus = np.exp(theta[:, 0]), np.exp(theta[:, 1])
+        z = 1.96 * np.minimum(sd, 50.0)
+        mua_ci = np.column_stack([mua * np.exp(-z[:, 0]), mua * np.exp(z[:, 0])])
+        mus_ci = np.column_stack([mus * np.exp(-z[:, 1]), mus * np.exp(z[:, 1])])
+        med = np.median(sd, axis=0)
+        pinned = {"log_mua": bool(med[0] < PINNED_SD), "log_mus": bool(med[1] < PINNED_SD)}
+        pinned_sd = {"log_mua": float(min(med[0], 1e6)), "log_mus": float(min(med[1], 1e6))}
+    else:
+        out_bands = np.asarray(LAB_OUT_BANDS)
+        mua, mus = _lab_spectrum(theta[0], out_bands)
+        rng = np.random.default_rng(0)
+        c = cov[0] if np.all(np.isfinite(sd)) else np.diag(np.full(5, 25.0))
+        draws = rng.multivariate_normal(theta[0], c, size=400, check_valid="ignore")
+        a_d, s_d = _lab_spectrum(draws, out_bands)
+        mua_ci = np.column_stack([np.percentile(a_d, 2.5, axis=0),
+                                  np.percentile(a_d, 97.5, axis=0)])
+        mus_ci = np.column_stack([np.percentile(s_d, 2.5, axis=0),
+                                  np.percentile(s_d, 97.5, axis=0)])
+        pinned = {p: bool(s < PINNED_SD) for p, s in zip(LAB_PARAMS, sd[0], strict=True)}
+        pinned_sd = {p: float(min(s, 1e6)) for p, s in zip(LAB_PARAMS, sd[0], strict=True)}
+        pinned.update(log_mua=pinned["log_mua_550"], log_mus=pinned["log_mus_550"])
+    mua_ci = np.minimum(np.maximum(mua_ci, 0.0), 1e5)
+    mus_ci = np.minimum(np.maximum(mus_ci, 0.0), 1e5)
+    if len(conditions) < 2:
+        identifiable = False
+        why = (f"one thickness over one backing ({len(readings.rows)} reading(s) of one "
+               "condition) cannot pin both μa and μs: read the disc over black and white, or "
+               "at a second thickness")
+    elif not (pinned["log_mua"] and pinned["log_mus"]):
+        identifiable = False
+        loose = [q for q, k in (("μa", "log_mua"), ("μs", "log_mus")) if not pinned[k]]
+        why = (f"the readings barely constrain {' and '.join(loose)} (standard deviation in "
+               f"log above {PINNED_SD}; e.g. backings that barely differ through a thick "
+               "disc): read a thinner disc, or over a darker and a lighter backing")
+    else:
+        identifiable = True
+        why = "both coefficients pinned by the readings"
+    # residuals per reading in ΔE00, predicted against measured
+    meas_lab = (np.array([row.lab for row in readings.rows]) if form == "lab"
+                else prob.lab(np.array([row.spectrum for row in readings.rows])))
+    pred_lab = prob.lab(pred)
+    de = np.atleast_1d(delta_e00(pred_lab, meas_lab))
+    residuals = []
+    noise = []
+    for i, row in enumerate(readings.rows):
+        lab_err = np.abs(prob.lab(pred[i] + err[i]) - pred_lab[i])
+        noise.append(delta_e00_scale(pred_lab[i], lab_err) if np.any(lab_err) else 0.0)
+        if form == "lab":
+            sd_lab = np.asarray(row.sd_lab if row.sd_lab is not None else (0.0,) * 3)
+        else:
+            sd = row.sd_spectrum if row.sd_spectrum is not None else np.zeros(len(bands))
+            sd_lab = np.abs(prob.lab(row.spectrum + sd) - meas_lab[i])
+        spread = delta_e00_scale(meas_lab[i], sd_lab) if np.any(sd_lab) else 0.0
+        residuals.append({"thickness_mm": row.thickness_mm, "backing": row.backing,
+                          "delta_e00": float(de[i]), "line": row.line,
+                          "measured_lab": [float(x) for x in meas_lab[i]],
+                          "predicted_lab": [float(x) for x in pred_lab[i]],
+                          "mc_stderr_de00": float(noise[-1]),
+                          "reading_sd_de00": float(spread)})
+    warnings = []
+    # a residual beyond WARN_RESIDUAL plus three combined spreads (reading sd, Monte Carlo)
+    # is more than noise: the model cannot reproduce that reading
+    bad = [r for r in residuals if r["delta_e00"] > WARN_RESIDUAL + 3 * math.hypot(
+        r["mc_stderr_de00"], r["reading_sd_de00"])]
+    if bad:
+        worst = max(bad, key=lambda x: x["delta_e00"])
+        warnings.append(
+            f"the fit leaves {worst['delta_e00']:.2f} ΔE00 at {worst['thickness_mm']:g} mm over "
+            f"{worst['backing']} (line {worst['line']}): no μa, μs >= 0 with g {g:g} and n "
+            f"{n:g} reproduces every reading through {inst.name}; check the backings, the "
+            "instrument and g, n")
+    if not identifiable:
+        warnings.append(why)
+    if edge_note:
+        warnings.append(edge_note)
+    return ReadingsFit(model=model, wavelength_nm=out_bands, mua=np.asarray(mua),
+                       mus=np.asarray(mus), mua_ci=mua_ci, mus_ci=mus_ci, g=float(g),
+                       n=float(n), assumed=assumed, residuals=residuals,
+                       identifiable=identifiable, identifiability=why,
+                       pinned={"pinned": pinned, "sd_log": pinned_sd},
+                       seconds=time.perf_counter() - start, evaluations=evaluations,
+                       photons=photons if model == "mc" else 0, seed=seed,
+                       cpu_seconds=prob.cpu_seconds,
+                       warnings=warnings, mc_stderr_de00=float(np.max(noise)))
+
+
+# --- the material file ----------------------------------------------------------------------
+
+
+def _r(v: float) -> float:
+    return float(f"{v:.6g}")
+
+
+def material_doc(res: ReadingsFit, readings: Readings, inst, name: str,
+                 date: str | None = None) -> dict:
+    """The ``[materials.NAME]`` document of a fit, with its provenance."""
+    from pathlib import Path
+
+    form = ("spectral reflectance per band" if readings.form == "spectral" else
+            "CIELAB only, through a smooth five-parameter spectrum (" + ", ".join(
+                f"{p} {'pinned' if res.pinned['pinned'][p] else 'NOT pinned'}"
+                for p in LAB_PARAMS) + ")")
+    model = ("Monte Carlo through the instrument model (dentalux.dental.read, edge loss "
+             f"included; {res.photons} photons per band, seed {res.seed}, common random "
+             f"numbers; Monte Carlo noise up to {res.mc_stderr_de00:.2f} ΔE00 per reading)"
+             if res.model == "mc" else
+             "Kubelka-Munk with the Saunderson correction (no edge loss; K = 2 mua, "
+             "S = 0.75 mus (1 - g))")
+    resid = [f"{r['thickness_mm']:g} mm over {r['backing']}: {r['delta_e00']:.3f} ΔE00"
+             for r in res.residuals]
+    notes = (f"Fitted to {len(readings.rows)} readings ({form}) by {model}. Identifiable: "
+             f"{'yes' if res.identifiable else 'NO'} ({res.identifiability}). mua_ci and "
+             "mus_ci are 95 % intervals from the readings' sd (or the default "
+             f"{DEFAULT_SD[readings.form]}) and the Monte Carlo error.")
+    return {"materials": {name: {
+        "description": f"fitted from the readings {Path(readings.path).name} read with "
+                       f"{inst.name}",
+        "extrapolate": True,
+        "wavelength_nm": [float(w) for w in res.wavelength_nm],
+        "mua": [_r(v) for v in res.mua],
+        "mus": [_r(v) for v in res.mus],
+        "g": [res.g] * len(res.wavelength_nm),
+        "fd": [0.0] * len(res.wavelength_nm),
+        "n": [res.n] * len(res.wavelength_nm),
+        "mua_ci": [[_r(a), _r(b)] for a, b in res.mua_ci],
+        "mus_ci": [[_r(a), _r(b)] for a, b in res.mus_ci],
+        "provenance": {
+            "kind": "fitted",
+            "source": f"readings file {Path(readings.path).name} (sha256 {readings.sha256}), "
+                      f"read with the instrument {inst.name}",
+            "model": res.model,
+            "instrument": inst.name,
+            "readings_sha256": readings.sha256,
+            "date": date or _dt.date.today().isoformat(),
+            "identifiable": res.identifiable,
+            "residuals_delta_e00": resid,
+            "notes": notes,
+            "values": {
+                "mua": f"fitted: {res.model} fit to {Path(readings.path).name}",
+                "mus": f"fitted: {res.model} fit to {Path(readings.path).name}",
+                "g": res.assumed["g"],
+                "n": res.assumed["n"],
+                "fd": "assumed: 0 (pure Henyey-Greenstein)",
+            },
+        },
+    }}}
