@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import typer
@@ -81,8 +82,8 @@ def _fit_readings(readings_path: Path, instrument_name, g, n, model, photons, se
             msg = str(exc).replace(str(tmp), str(out))
             raise ValueError(f"--out = '{out}': the fitted material would not load ({msg}); "
                              "nothing was written") from None
-    for w in res.warnings:
-        Console(stderr=True).print(f"warning: {w}")
+    for w in res.warnings:  # plain lines: a warning is never wrapped mid-word
+        print(f"warning: {w}", file=sys.stderr)
     if as_json:
         print(dumps_strict({
             "material": name, "file": str(out),

@@ -1,0 +1,170 @@
+"""dentalux fit --readings: readings files, their bad input, the Kubelka-Munk baseline, and
+the round trip shade --readings-out -> fit -> predict another thickness (issue 41)."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from dentalux import dental, instrument, readings
+from dentalux.cli import main
+from dentalux.color import delta_e00
+from dentalux.inverse import readings_fit as rf
+
+INST = "contact-probe-3mm"
+BANDS = [450.0, 500.0, 550.0, 600.0, 650.0]
+# a material unknown to the fit (constant g, as the fit assumes): a composite-like spectrum
+MATERIAL = """[materials.comp]
+extrapolate = true
+description = "test composite"
+wavelength_nm = [400.0, 450.0, 500.0, 550.0, 600.0, 650.0, 700.0]
+mua = [0.6, 0.3, 0.12, 0.05, 0.03, 0.02, 0.015]
+mus = [14.0, 12.0, 11.0, 10.0, 9.0, 8.5, 8.0]
+g = [0.8, 0.8, 0.8, 0.8, 0.8, 0.8, 0.8]
+fd = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+n = [1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5]
+[materials.comp.provenance]
+kind = "derived"
+source = "test"
+"""
+
+
+def run(capsys, *args):
+    """The command line in process: (exit code, stdout, stderr)."""
+    try:
+        main([str(a) for a in args])
+        code = 0
+    except SystemExit as exc:
+        code = exc.code or 0
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+GOOD = ("thickness_mm,backing,L,a,b\n0.5,black,40,-1,2\n0.5,white,70,1,8\n"
+        "1.0,black,45,-1,4\n1.0,white,60,0,8\n")
+
+
+@pytest.mark.parametrize("text,needle", [
+    ("", "empty"),
+    ("thickness_mm,backing,L,a,b\n", "empty"),
+    ("thickness_mm,L,a,b\n0.5,40,0,0\n", "missing column(s) backing"),
+    ("thickness_mm,backing,L,a\n0.5,black,40,0\n", "missing column(s) b"),
+    ("thickness_mm,backing,L,a,b\n0,black,40,0,0\n", "line 2: thickness_mm"),
+    ("thickness_mm,backing,L,a,b\n-1,black,40,0,0\n", "line 2: thickness_mm"),
+    ("thickness_mm,backing,L,a,b\n0.5,black,nan,0,0\n", "line 2: L"),
+    ("thickness_mm,backing,L,a,b\n0.5,black,140,0,0\n", "line 2: L = 140"),
+    ("thickness_mm,backing,r500\n0.5,black,1.2\n", "line 2: r500 = 1.2"),
+    ("thickness_mm,backing,r500\n0.5,1.5,0.2\n", "line 2: backing"),
+    ("thickness_mm,backing,r505\n0.5,black,0.2\n", "'r505' is off the 10 nm grid"),
+    ("thickness_mm,backing,r500,r510\n0.5,black,0.3,0.3\n0.5,white,0.4,0.2\n",
+     "line 3: column r510 = 0.2 over white is darker"),
+    ("thickness_mm,backing,L,a,b\n0.5,black,50,0,0\n0.5,white,40,0,0\n",
+     "line 3: column L = 40 over white is darker"),
+    ("thickness_mm,backing,L,a,b,foo\n0.5,black,50,0,0,1\n", "unknown column 'foo'"),
+])
+def test_bad_readings_exit_2_and_write_nothing(tmp_path, capsys, text, needle):
+    f = tmp_path / "r.csv"
+    f.write_text(text)
+    out = tmp_path / "m.toml"
+    code, stdout, err = run(capsys, "fit", "--readings", f, "--instrument", INST, "--model",
+                            "km", "--out", out, "--json")
+    assert code == 2, err
+    assert needle in err, err
+    assert not out.exists() and stdout == ""
+
+
+def test_km_recovers_its_own_readings_and_reports_identifiability(tmp_path, capsys):
+    """Readings made by the Kubelka-Munk forward model are fitted back to their
+    coefficients; the JSON contract holds; one reading is not identifiable."""
+    mua, mus = np.array([0.3, 0.1, 0.05]), np.array([12.0, 10.0, 9.0])
+    wl = [450, 550, 650]
+    rows = []
+    inst = instrument.get(INST)
+    k1 = 0.0 if inst.spec.specular == "excluded" else rf.specular(1.5, 1.0)
+    for t in (0.5, 1.0):
+        for b in ("black", "white"):
+            rb = getattr(inst, f"backing_{b}")
+            r = rf.km_reflectance(mua, mus, 0.8, 1.5, t, rb, k1)
+            rows.append(f"{t},{b}," + ",".join(f"{x:.8f}" for x in r))
+    f = tmp_path / "km.csv"
+    f.write_text("thickness_mm,backing," + ",".join(f"r{w}" for w in wl) + "\n"
+                 + "\n".join(rows) + "\n")
+    out = tmp_path / "km.toml"
+    code, stdout, err = run(capsys, "fit", "--readings", f, "--instrument", INST, "--g", 0.8,
+                            "--n", 1.5, "--model", "km", "--out", out, "--json")
+    assert code == 0, err
+    doc = json.loads(stdout)
+    assert set(doc) == {"material", "file", "residuals", "identifiable", "model"}
+    assert doc["model"] == "km" and doc["identifiable"] is True and doc["material"] == "km"
+    assert [set(r) for r in doc["residuals"]] == [{"thickness_mm", "backing", "delta_e00"}] * 4
+    assert max(r["delta_e00"] for r in doc["residuals"]) < 1e-3
+    from dentalux import materials
+
+    m = materials.load(out)["km"]
+    assert np.allclose(m.mua, mua, rtol=1e-3) and np.allclose(m.mus, mus, rtol=1e-3)
+    assert m.provenance["kind"] == "fitted" and m.provenance["instrument"] == INST
+    assert len(m.provenance["readings_sha256"]) == 64
+    assert m.provenance["values"]["g"].startswith("assumed")
+    # one thickness over one backing cannot pin both coefficients
+    f.write_text("thickness_mm,backing," + ",".join(f"r{w}" for w in wl) + "\n" + rows[0] + "\n")
+    code, stdout, err = run(capsys, "fit", "--readings", f, "--instrument", INST, "--model",
+                            "km", "--out", out, "--json")
+    assert code == 0, err
+    assert json.loads(stdout)["identifiable"] is False
+    assert "cannot pin both" in err
+
+
+def _predict_error(mat, thickness, truth):
+    """ΔE00 over black and white of the fitted material's reading against ``truth``, and
+    the combined standard error."""
+    pred = dental.read([(mat, thickness)], instrument=INST, photons=40_000, seed=12,
+                       bands=BANDS)
+    de = max(float(delta_e00(getattr(pred, f"lab_{b}"), getattr(truth, f"lab_{b}")))
+             for b in ("black", "white"))
+    se = math.hypot(dental.reading_precision(pred), dental.reading_precision(truth))
+    return de, se
+
+
+def test_round_trip_shade_readings_fit_predicts_another_thickness(tmp_path, capsys):
+    """shade --readings-out at 0.5 and 1.0 mm -> fit (mc) -> the reading at 1.5 mm within
+    two standard errors of the Monte Carlo noise plus 0.5 ΔE00; Kubelka-Munk's error on the
+    same readings is printed beside it (it ignores edge loss)."""
+    mat = tmp_path / "comp.toml"
+    mat.write_text(MATERIAL)
+    csv = tmp_path / "r.csv"
+    for t in (0.5, 1.0):
+        code, _, err = run(capsys, "shade", mat, "--thickness", t, "--instrument", INST,
+                           "--bands", ",".join(f"{b:g}" for b in BANDS), "--photons", 100_000,
+                           "--seed", 5, "--readings-out", csv, "--json")
+        assert code == 0, err
+    data = readings.load(csv)
+    assert data.form == "spectral" and len(data.rows) == 4
+    out = tmp_path / "fit.toml"
+    code, stdout, err = run(capsys, "fit", "--readings", csv, "--instrument", INST, "--g", 0.8,
+                            "--n", 1.5, "--photons", 20_000, "--out", out, "--json")
+    assert code == 0, err
+    doc = json.loads(stdout)
+    assert doc["model"] == "mc" and doc["identifiable"] is True
+    # the written TOML loads wherever a material is accepted
+    code, stdout, err = run(capsys, "shade", "--layer", f"{out}:1.5", "--instrument", INST,
+                            "--bands", "450,550,650", "--photons", 2000, "--json")
+    assert code == 0, err
+    from dentalux import materials
+
+    code, _, err = run(capsys, "fit", "--readings", csv, "--instrument", INST, "--g", 0.8,
+                       "--n", 1.5, "--model", "km", "--out", tmp_path / "km.toml", "--json")
+    assert code == 0, err
+    truth = dental.read([(str(mat), 1.5)], instrument=INST, photons=100_000, seed=11,
+                        bands=BANDS)
+    de, se = _predict_error(materials.load(out)["fit"], 1.5, truth)
+    km = materials.load(tmp_path / "km.toml")["km"]
+    de_km, _ = _predict_error(km, 1.5, truth)
+    # Kubelka-Munk's own prediction (no instrument): its model at 1.5 mm
+    inst = instrument.get(INST)
+    prob = rf._Problem(data, inst, 0.8, 1.5, "km", 0, 1, BANDS)
+    own = max(float(delta_e00(prob.lab(rf.km_reflectance(
+        km.mua, km.mus, 0.8, 1.5, 1.5, prob.rg(b), prob.k1)), getattr(truth, f"lab_{b}")))
+        for b in ("black", "white"))
+    print(f"1.5 mm: MC fit {de:.2f} ΔE00 (s.e. {se:.2f}); KM fit: its own model {own:.2f}, "
+          f"its coefficients read through the instrument {de_km:.2f} ΔE00")
+    assert de < 2 * se + 0.5, (de, se)
