@@ -85,3 +85,14 @@ def test_vita_classical_refusal_names_the_way_forward():
         shade_guides.lab("vita-classical", "A2")
     with pytest.raises(ValueError, match="guides import"):
         shade_guides.nearest((70, 1, 15), "vita-classical")
+
+
+def test_design_target_from_a_guide_file_says_its_instrument(data, capsys):
+    code, out, err = run(capsys, "design", "--target", f"{data}:A2", "--layer", "enamel:0.5-1.0",
+                         "--substrate", "dentin", "--instrument", "45-0", "--photons", 1000,
+                         "--bands", "450,550,650", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["target"]["lab"] == [75.0, 1.2, 17.5]
+    assert doc["target_instrument"]["same"] is False
+    assert doc["target_instrument"]["guide_instrument"] == ["contact-probe-3mm"]

@@ -168,3 +168,37 @@ def test_round_trip_shade_readings_fit_predicts_another_thickness(tmp_path, caps
     print(f"1.5 mm: MC fit {de:.2f} ΔE00 (s.e. {se:.2f}); KM fit: its own model {own:.2f}, "
           f"its coefficients read through the instrument {de_km:.2f} ΔE00")
     assert de < 2 * se + 0.5, (de, se)
+
+
+def test_round_trip_cielab_only(tmp_path, capsys):
+    """CIELAB-only readings (L,a,b over black and white at 0.5 and 1.0 mm) -> fit through
+    the smooth spectrum -> the reading at 1.5 mm within two standard errors plus 0.5 ΔE00."""
+    mat = tmp_path / "comp.toml"
+    mat.write_text(MATERIAL)
+    bands = list(rf.LAB_BANDS)
+    rows = ["thickness_mm,backing,L,a,b,sd_L,sd_a,sd_b"]
+    for t in (0.5, 1.0):
+        m = dental.read([(str(mat), t)], instrument=INST, photons=30_000, seed=5, bands=bands)
+        for b in ("black", "white"):
+            lab = getattr(m, f"lab_{b}")
+            se = [m.stderr[f"lab_{b}.{c}"] for c in "Lab"]
+            rows.append(f"{t},{b}," + ",".join(f"{x:.4f}" for x in (*lab, *se)))
+    csv = tmp_path / "lab.csv"
+    csv.write_text("\n".join(rows) + "\n")
+    out = tmp_path / "lab.toml"
+    code, stdout, err = run(capsys, "fit", "--readings", csv, "--instrument", INST, "--g", 0.8,
+                            "--n", 1.5, "--photons", 10_000, "--out", out, "--json")
+    assert code == 0, err
+    assert json.loads(stdout)["model"] == "mc"
+    from dentalux import materials
+
+    fitted = materials.load(out)["lab"]
+    assert "log_mua_550" in fitted.provenance["notes"]  # which parameters the readings pin
+    truth = dental.read([(str(mat), 1.5)], instrument=INST, photons=30_000, seed=11,
+                        bands=bands)
+    pred = dental.read([(fitted, 1.5)], instrument=INST, photons=20_000, seed=12, bands=bands)
+    de = max(float(delta_e00(getattr(pred, f"lab_{b}"), getattr(truth, f"lab_{b}")))
+             for b in ("black", "white"))
+    se = math.hypot(dental.reading_precision(pred), dental.reading_precision(truth))
+    print(f"CIELAB-only, 1.5 mm: MC fit {de:.2f} ΔE00 (s.e. {se:.2f})")
+    assert de < 2 * se + 0.5, (de, se)

@@ -405,6 +405,12 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
     prob = km
     edge_note = ""
     if model == "mc":
+        used = {row.backing for row in readings.rows if isinstance(row.backing, str)}
+        spectral_backing = [b for b in used if isinstance(getattr(inst, f"backing_{b}"), tuple)]
+        if spectral_backing:  # the table reads every node under one backing value
+            raise ValueError(f"--model mc: the instrument {inst.name}'s {spectral_backing[0]} "
+                             "backing is a spectrum; the fit's table needs one reflectance "
+                             "per backing: give the backing as a number in the readings file")
         prob = _Problem(readings, inst, g, n, "mc", photons, seed, bands)
         mua0, mus0 = obj.coefficients(theta)
         span_a = (max(math.log(float(np.min(mua0))) - TABLE_SPAN["mua"][0], LOG_BOUNDS[0]),
