@@ -249,6 +249,17 @@ class _Problem:
         return self.cs.XYZ_to_Lab(self.cs.grid_to_XYZ(self.rec(np.asarray(spectra))))
 
 
+def _lab_spread(prob: _Problem, spectrum, sd) -> np.ndarray:
+    """The standard deviation of L*, a*, b* from independent errors ``sd`` of each band, to
+    first order (one derivative per band)."""
+    spectrum, sd = np.asarray(spectrum, float), np.asarray(sd, float)
+    if not np.any(sd):
+        return np.zeros(3)
+    base = prob.lab(spectrum)
+    steps = spectrum[None, :] + np.diag(sd)
+    return np.sqrt(np.sum((prob.lab(steps) - base) ** 2, axis=0))
+
+
 # --- parametrisations ---------------------------------------------------------------------
 
 
@@ -299,7 +310,7 @@ class _Lab:
         pred, err = self.p.spectra(*self.coefficients(theta))
         lab = self.p.lab(pred)
         # the Monte Carlo error of each L*, a*, b*, to first order through the reconstruction
-        lab_err = np.abs(self.p.lab(pred + err) - lab)
+        lab_err = np.array([_lab_spread(self.p, p, e) for p, e in zip(pred, err, strict=True)])
         sigma = np.sqrt(self.sd ** 2 + lab_err ** 2)
         return ((lab - self.meas) / sigma).reshape(1, -1), pred, err
 
@@ -424,23 +435,45 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
             lo[:, 1], hi[:, 1] = span_s
             theta = np.clip(theta, lo, hi)
         its = DEFAULT_ITERATIONS["table"] if iterations is None else iterations
+        best = None
         for _ in range(CORRECTIONS + 1):
             theta, r, pred_t, err_t, jac = _lm(obj, theta, TABLE_STEP, its, lo, hi)
             prob.model = "mc"  # the Monte Carlo reading at the fit, through the instrument
             r, pred, err = obj.residuals(theta)
             prob.model = "table"
+            # keep the best Monte Carlo-verified iterate, per block (band) where blocks are
+            # independent: the corrections may oscillate within the noise
+            cost = np.sum(r * r, axis=1)
+            if best is None:
+                best = [theta.copy(), r.copy(), pred.copy(), err.copy(), jac.copy(), cost]
+            else:
+                win = cost < best[5]
+                mask = win[None, :] if form == "spectral" else win[0]
+                best = [np.where(win[:, None], theta, best[0]), np.where(win[:, None], r, best[1]),
+                        np.where(mask, pred, best[2]), np.where(mask, err, best[3]),
+                        np.where(win[:, None, None], jac, best[4]), np.minimum(cost, best[5])]
             # defect correction: the table's error at the fit moves the next fit's target
             prob.defect = prob.defect + (pred - pred_t)
+        theta, r, pred, err, jac = best[:5]
         evaluations = prob.mc_calls
-        edge = []
+        low_mua, edge = [], []
         if form == "spectral":
-            edge = [i for i in range(len(bands)) if np.any(np.isclose(theta[i], lo[i]))
-                    or np.any(np.isclose(theta[i], hi[i]))]
+            for i in range(len(bands)):
+                at_lo, at_hi = np.isclose(theta[i], lo[i]), np.isclose(theta[i], hi[i])
+                if at_lo[0] and not (at_lo[1] or np.any(at_hi)):
+                    low_mua.append(i)  # absorption below what the readings resolve
+                elif np.any(at_lo) or np.any(at_hi):
+                    edge.append(i)
+        notes = []
+        if low_mua:
+            notes.append(f"μa is below what the readings resolve at {len(low_mua)} band(s) "
+                         f"({', '.join(f'{bands[i]:g}' for i in low_mua[:5])} nm): at most "
+                         f"{math.exp(span_a[0]):.2g} /mm there (the value written is that bound)")
         if edge:
-            edge_note = (f"the fit reached the edge of its table at {len(edge)} band(s) "
-                         f"({', '.join(f'{bands[i]:g}' for i in edge[:5])} nm)")
-        else:
-            edge_note = ""
+            notes.append(f"the fit reached the edge of its table at {len(edge)} band(s) "
+                         f"({', '.join(f'{bands[i]:g}' for i in edge[:5])} nm): the readings "
+                         "may lie outside what g and n allow")
+        edge_note = "; ".join(notes)
     # uncertainty of each parameter: (J^T J)^-1 with residuals in units of their sigma
     jtj = np.einsum("bmi,bmj->bij", jac, jac)
     cov = np.linalg.pinv(jtj)
@@ -495,13 +528,13 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
     residuals = []
     noise = []
     for i, row in enumerate(readings.rows):
-        lab_err = np.abs(prob.lab(pred[i] + err[i]) - pred_lab[i])
+        lab_err = _lab_spread(prob, pred[i], err[i])
         noise.append(delta_e00_scale(pred_lab[i], lab_err) if np.any(lab_err) else 0.0)
         if form == "lab":
             sd_lab = np.asarray(row.sd_lab if row.sd_lab is not None else (0.0,) * 3)
         else:
             sd = row.sd_spectrum if row.sd_spectrum is not None else np.zeros(len(bands))
-            sd_lab = np.abs(prob.lab(row.spectrum + sd) - meas_lab[i])
+            sd_lab = _lab_spread(prob, row.spectrum, sd)
         spread = delta_e00_scale(meas_lab[i], sd_lab) if np.any(sd_lab) else 0.0
         residuals.append({"thickness_mm": row.thickness_mm, "backing": row.backing,
                           "delta_e00": float(de[i]), "line": row.line,
