@@ -231,6 +231,8 @@ def check_out(path) -> Path:
 def comment_from_shade(out: dict, material, photons, seed) -> str:
     """The comment lines a written readings file starts with."""
     ins = out.get("instrument", {})
+    bands = len(out.get("wavelength_nm") or []) or 1
+    photons = out.get("photons", 0) // bands or photons  # the JSON's count is over all bands
     return (f"written by dentalux shade --readings-out: {material}, read with "
             f"{ins.get('name', '?')} ({photons} photons per band, "
             f"seed {seed}); sd_* are Monte Carlo standard errors\n"
