@@ -96,3 +96,20 @@ def test_design_target_from_a_guide_file_says_its_instrument(data, capsys):
     assert doc["target"]["lab"] == [75.0, 1.2, 17.5]
     assert doc["target_instrument"]["same"] is False
     assert doc["target_instrument"]["guide_instrument"] == ["contact-probe-3mm"]
+
+
+def test_render_match_takes_a_guide_file(data, tmp_path):
+    """render --match FILE.csv: each region's nearest tabs of the lab's guide, with the
+    instrument the guide was read with (the render's own geometry is another)."""
+    from test_regions import _cornell_with_regions
+
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as exc:
+        main(["render", str(_cornell_with_regions(tmp_path)), "--out", str(out), "--spp", "1",
+              "--photons", "2000", "--match", str(data), "--json"])
+    assert exc.value.code == 0
+    colour = json.loads((out / "colour.json").read_text())
+    for reg in colour["regions"].values():
+        want = shade_guides.nearest(reg["lab"], str(data))
+        assert [(m["tab"], m["delta_e00"]) for m in reg["shade_match"]] == want
+        assert reg["shade_match_guide_instrument"] == ["contact-probe-3mm"]

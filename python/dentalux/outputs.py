@@ -52,15 +52,19 @@ def region_matcher(guide: str | None):
     without a guide. Checks up front that the guide exists and has published values."""
     if guide is None:
         return None
-    from dentalux.shade_guides import nearest
+    from dentalux.shade_guides import instruments_of, nearest
 
     nearest((50.0, 0.0, 0.0), guide)  # an unknown guide or one without values fails here
+    read_with = instruments_of(guide)
 
     def extra(lab) -> dict:
         return {"shade_match": [{"tab": t, "delta_e00": de} for t, de in nearest(lab, guide)],
                 "shade_match_guide": guide,
                 "shade_match_geometry": "the render's own lights and camera, mean spectrum "
-                                        "of the region"}
+                                        "of the region",
+                # the guide's tabs were read with an instrument, the region by the render's
+                # camera: another geometry, said in the output (issue 41)
+                "shade_match_guide_instrument": read_with}
     return extra
 
 

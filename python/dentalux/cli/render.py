@@ -115,8 +115,9 @@ def render_command(
              "(default: off; docs/spectral-photons.md)"),
     match: str = typer.Option(
         None, "--match",
-        help="a shade guide (see `dentalux shade --help`): colour.json gives each measured "
-             "region's nearest tabs with their ΔE00"),
+        help="a shade guide (see `dentalux shade --help`; an imported guide or a guide "
+             "FILE.csv too): colour.json gives each measured region's nearest tabs with their "
+             "ΔE00 and the instrument the guide was read with"),
     cluster: str = typer.Option(
         None, help="run the band x pass tasks on Dask: local:N (LocalCluster of N workers) "
                    "or tcp://HOST:PORT (a running scheduler)"),
