@@ -20,11 +20,22 @@ Parameters: for spectral readings, log μa and log μs per band (the bands are i
 so one perturbed evaluation gives every band's derivative); for CIELAB-only readings a smooth
 five-parameter spectrum, log μa(λ) = c0 + c1 x + c2 x², log μs(λ) = s0 − b ln(λ/550 nm),
 x = (λ − 550 nm)/100 nm, fitted on :data:`LAB_BANDS`. Levenberg–Marquardt with
-finite-difference Jacobians, started from the Kubelka–Munk fit. The uncertainty of each
-parameter comes from the Jacobian with the readings' sd (or :data:`DEFAULT_SD`) and the Monte
-Carlo standard error; a parameter whose standard deviation in log exceeds
-:data:`PINNED_SD` is not pinned by the readings, and one thickness over one backing never
-pins both coefficients (``identifiable`` false).
+finite-difference Jacobians, started from the Kubelka–Munk fit.
+
+The ``mc`` model is not called at every step. A reading depends on the band only through the
+material (the backings and n are the same in every band), so one Monte Carlo reading whose
+"bands" are the nodes of a (log μa, log μs) grid around the Kubelka–Munk fit tabulates each
+thickness's readings over black and white (:meth:`_Problem.build_table`, a smoothing spline
+whose misfit is the nodes' Monte Carlo variance). The fit runs on the table; the fitted
+coefficients are then read by Monte Carlo at the readings' bands and the difference moves the
+table's target (a defect correction, :data:`CORRECTIONS` times); the best verified iterate is
+kept, band by band. Measured: docs/notes/2026-12-07-fit-readings.md (a fit calling the Monte
+Carlo at every step needed about 20 readings per thickness and stalled at 1–3 ΔE00).
+
+The uncertainty of each parameter comes from the Jacobian with the readings' sd (or
+:data:`DEFAULT_SD`) and the Monte Carlo standard error; a parameter whose standard deviation
+in log exceeds :data:`PINNED_SD` is not pinned by the readings, and one thickness over one
+backing never pins both coefficients (``identifiable`` false).
 """
 
 from __future__ import annotations
@@ -371,7 +382,7 @@ def _lm(obj, theta, step, iterations, lo, hi, final_jacobian=True):
 # --- the fit ------------------------------------------------------------------------------
 
 
-def _start(form, prob_km, bands):
+def _start(form, bands):
     if form == "spectral":
         return np.column_stack([np.full(len(bands), math.log(0.05)),
                                 np.full(len(bands), math.log(5.0))])
@@ -409,7 +420,7 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
     # Kubelka–Munk first: the baseline, and the start of the Monte Carlo fit
     km = _Problem(readings, inst, g, n, "km", photons, seed, bands)
     obj = wrap(km)
-    theta = _start(form, km, bands)
+    theta = _start(form, bands)
     lo, hi = _bounds(theta.shape, form)
     theta, r, pred, err, jac = _lm(obj, theta, KM_STEP, DEFAULT_ITERATIONS["km"], lo, hi)
     evaluations = km.evaluations
