@@ -202,3 +202,42 @@ def test_round_trip_cielab_only(tmp_path, capsys):
     se = math.hypot(dental.reading_precision(pred), dental.reading_precision(truth))
     print(f"CIELAB-only, 1.5 mm: MC fit {de:.2f} ΔE00 (s.e. {se:.2f})")
     assert de < 2 * se + 0.5, (de, se)
+
+
+def _km_rows(mua, mus, conditions, wl=(450, 550, 650)):
+    inst = instrument.get(INST)
+    k1 = 0.0 if inst.spec.specular == "excluded" else rf.specular(1.5, 1.0)
+    rows = []
+    for t, b in conditions:
+        r = rf.km_reflectance(np.asarray(mua), np.asarray(mus), 0.8, 1.5, t,
+                              getattr(inst, f"backing_{b}"), k1)
+        rows.append(f"{t},{b}," + ",".join(f"{x:.8f}" for x in r))
+    return "thickness_mm,backing," + ",".join(f"r{w}" for w in wl) + "\n" + "\n".join(rows) + "\n"
+
+
+def test_backings_that_barely_differ_through_a_thick_disc_are_not_identifiable(tmp_path,
+                                                                             capsys):
+    f = tmp_path / "thick.csv"
+    f.write_text(_km_rows([0.5, 0.4, 0.3], [60.0, 50.0, 40.0], [(6.0, "black"), (6.0, "white")]))
+    code, stdout, err = run(capsys, "fit", "--readings", f, "--instrument", INST, "--g", 0.8,
+                            "--n", 1.5, "--model", "km", "--out", tmp_path / "m.toml", "--json")
+    assert code == 0, err
+    assert json.loads(stdout)["identifiable"] is False
+    assert "barely constrain" in err
+
+
+def test_readings_no_coefficients_reproduce_get_a_fit_and_a_warning(tmp_path, capsys):
+    """Over black brighter at 1 mm than at 0.5 mm, over white darker: no μa, μs >= 0 gives
+    both; the fit is written with finite residuals and a warning, never NaN."""
+    f = tmp_path / "odd.csv"
+    f.write_text("thickness_mm,backing,r450,r550,r650\n0.5,black,0.05,0.05,0.05\n"
+                 "0.5,white,0.80,0.80,0.80\n1.0,black,0.60,0.60,0.60\n"
+                 "1.0,white,0.62,0.62,0.62\n")
+    out = tmp_path / "m.toml"
+    code, stdout, err = run(capsys, "fit", "--readings", f, "--instrument", INST, "--model",
+                            "km", "--out", out, "--json")
+    assert code == 0, err
+    doc = json.loads(stdout)
+    assert all(math.isfinite(r["delta_e00"]) for r in doc["residuals"])
+    assert max(r["delta_e00"] for r in doc["residuals"]) > 2.0
+    assert "no μa, μs >= 0" in err and out.is_file()

@@ -359,7 +359,10 @@ def _lm(obj, theta, step, iterations, lo, hi, final_jacobian=True):
         jtr = np.einsum("bmi,bm->bi", jac, r)
         damp = jtj + lam[:, None, None] * (np.eye(theta.shape[1]) * np.maximum(
             np.diagonal(jtj, axis1=1, axis2=2)[:, :, None], 1e-9))
-        delta = -np.linalg.solve(damp, jtr[..., None])[..., 0]
+        # pseudo-inverse: a reading insensitive to a parameter (a flat Jacobian column,
+        # e.g. a thick opaque disc) leaves that parameter where it is instead of failing
+        delta = -np.einsum("bij,bj->bi", np.linalg.pinv(np.nan_to_num(damp)),
+                           np.nan_to_num(jtr))
         delta = np.clip(delta, -2.0, 2.0)  # at most a factor e^2 a step
         trial = np.clip(theta + delta, lo, hi)
         r_t, pred_t, err_t = obj.residuals(trial)
