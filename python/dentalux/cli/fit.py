@@ -85,11 +85,11 @@ def _fit_readings(readings_path: Path, instrument_name, g, n, model, photons, se
     for w in res.warnings:  # plain lines: a warning is never wrapped mid-word
         print(f"warning: {w}", file=sys.stderr)
     if as_json:
-        print(dumps_strict({
+        print(dumps_checked({
             "material": name, "file": str(out),
             "residuals": [{k: r[k] for k in ("thickness_mm", "backing", "delta_e00")}
                           for r in res.residuals],
-            "identifiable": res.identifiable, "model": res.model}))
+            "identifiable": res.identifiable, "model": res.model}, "fit"))
         return
     table = Table(title=f"{name}: {res.model} fit to {readings_path} read with {inst.name} "
                         f"(g {res.g:g}, n {res.n:g}; {res.seconds:.1f} s)")
