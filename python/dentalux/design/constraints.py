@@ -112,3 +112,27 @@ def parse_fixed_layers(texts) -> list[tuple[str, float]]:
     if len(out) > MAX_LAYERS:
         raise ValueError(f"layer: {len(out)} given, allowed 1 to {MAX_LAYERS} layers")
     return out
+
+
+def parse_cement(cement) -> tuple | None:
+    """``MATERIAL:MM`` or (material, mm) -> (material, mm) with the thickness checked, or
+    None for no cement. The material is returned as given (a name, file or Material)."""
+    if cement is None:
+        return None
+    if isinstance(cement, str):
+        mat, sep, mm = cement.rpartition(":")
+        try:
+            cement = (mat, float(mm))
+        except ValueError:
+            sep = ""
+        if not sep or not mat:
+            raise ValueError(f"cement = {cement!r}: expected MATERIAL:MM")
+    try:
+        mat, mm = cement
+        mm = float(mm)
+    except (TypeError, ValueError):
+        raise ValueError(f"cement = {cement!r}: expected (material, thickness [mm])") from None
+    if not (math.isfinite(mm) and 0 < mm <= MAX_MM):
+        raise ValueError(f"cement thickness = {mm!r} is out of range: allowed "
+                         f"(0, {MAX_MM:g}] mm")
+    return mat, mm

@@ -121,26 +121,9 @@ def parse_layers(layers) -> list[tuple[object, tuple[float, float] | None]]:
 
 
 def _cement(cement):
-    """``MATERIAL:MM`` or (material, mm) -> (material, mm), or None."""
-    if cement is None:
-        return None
-    if isinstance(cement, str):
-        mat, sep, mm = cement.rpartition(":")
-        try:
-            cement = (mat, float(mm))
-        except ValueError:
-            sep = ""
-        if not sep or not mat:
-            raise ValueError(f"cement = {cement!r}: expected MATERIAL:MM")
-    try:
-        mat, mm = cement
-        mm = float(mm)
-    except (TypeError, ValueError):
-        raise ValueError(f"cement = {cement!r}: expected (material, thickness [mm])") from None
-    if not (math.isfinite(mm) and 0 < mm <= constraints.MAX_MM):
-        raise ValueError(f"cement thickness = {mm!r} is out of range: allowed "
-                         f"(0, {constraints.MAX_MM:g}] mm")
-    return dental._resolve_material(mat), mm
+    """``MATERIAL:MM`` or (material, mm) -> (resolved material, mm), or None."""
+    parsed = constraints.parse_cement(cement)
+    return None if parsed is None else (dental._resolve_material(parsed[0]), parsed[1])
 
 
 def evaluate(target, layers, candidates, total=None, substrate: str = "dentin", cement=None,

@@ -228,22 +228,7 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
         parts.append(m)
     tail = []
     if cement is not None:
-        if isinstance(cement, str):
-            mat, sep, mm = cement.rpartition(":")
-            try:
-                cement = (mat, float(mm))
-            except ValueError:
-                sep = ""
-            if not sep or not mat:
-                raise ValueError(f"cement = {cement!r}: expected MATERIAL:MM")
-        try:
-            mat, mm = cement
-            mm = float(mm)
-        except (TypeError, ValueError):
-            raise ValueError(f"cement = {cement!r}: expected (material, thickness [mm])") from None
-        if not (math.isfinite(mm) and 0 < mm <= constraints.MAX_MM):
-            raise ValueError(f"cement thickness = {mm!r} is out of range: allowed "
-                             f"(0, {constraints.MAX_MM:g}] mm")
+        mat, mm = constraints.parse_cement(cement)
         cm = dental._resolve_material(mat)
         check_data(cm, wl, "cement material")
         tail.append((cm, mm))

@@ -430,6 +430,19 @@ pub fn simulate_all(cfgs: &[SlabConfig], control: &Control) -> Result<Vec<SlabRe
     cfgs.par_iter().map(|cfg| simulate(cfg, control)).collect()
 }
 
+/// A Lambertian reflection off a backing in a medium of index `n_below`: a cosine-weighted
+/// direction up, refracted into the bottom layer (index `eta`), or `None` when the Fresnel
+/// roulette sends it back down onto the backing.
+pub(crate) fn lambertian_up_into(rng: &mut Stream, n_below: f64, eta: f64) -> Option<Vec3> {
+    let up = cosine_hemisphere(rng.uniform2());
+    let (r, cos_t) = reflectance_and_cos_t(up.z, n_below, eta);
+    if r >= 1.0 || (r > 0.0 && rng.uniform() < r) {
+        return None;
+    }
+    let k = n_below / eta;
+    Some(Vec3::new(up.x * k, up.y * k, -cos_t))
+}
+
 /// Per-layer constants of the walk, computed once per run instead of once per step.
 #[derive(Clone, Copy)]
 struct LayerConst {
@@ -899,15 +912,8 @@ impl<'a> Tracer<'a> {
     /// into the bottom layer, or `None` when the Fresnel roulette sends it back down onto
     /// the backing.
     fn reflect_off_backing(&self, rng: &mut Stream) -> Option<Vec3> {
-        let n_below = self.cfg.n_below;
         let eta = self.layers[self.layers.len() - 1].eta;
-        let up = cosine_hemisphere(rng.uniform2());
-        let (r, cos_t) = reflectance_and_cos_t(up.z, n_below, eta);
-        if r >= 1.0 || (r > 0.0 && rng.uniform() < r) {
-            return None;
-        }
-        let k = n_below / eta;
-        Some(Vec3::new(up.x * k, up.y * k, -cos_t))
+        lambertian_up_into(rng, self.cfg.n_below, eta)
     }
 
     /// Light reaching the backing at `pos` with backing orders: its arrival inside the window

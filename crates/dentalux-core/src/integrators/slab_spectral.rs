@@ -26,7 +26,9 @@
 //! [`BackingOrders`], so every backing is read from the same walk too. A walk whose every
 //! band weight has fallen below [`ROULETTE_WEIGHT`] continues by Russian roulette.
 
-use super::slab::{batch_size, BackingOrders, Incidence, SlabLayer, REPLICATES};
+use super::slab::{
+    batch_size, lambertian_up_into, BackingOrders, Incidence, SlabLayer, REPLICATES,
+};
 use crate::control::Control;
 use crate::error::{check_range, Error, Result};
 use crate::fresnel::reflectance_and_cos_t;
@@ -34,7 +36,7 @@ use crate::instrument::{self, Window};
 use crate::math::{rotate_direction_scaled, Vec3};
 use crate::phase::PhaseFunction;
 use crate::rng::Stream;
-use crate::sampling::{cosine_hemisphere, sample_azimuth_scaled_bits};
+use crate::sampling::sample_azimuth_scaled_bits;
 use rayon::prelude::*;
 
 /// Largest band weight below which a walk continues by Russian roulette (survival
@@ -512,15 +514,11 @@ impl<'a> Tracer<'a> {
                     }
                     order += 1;
                     let eta = self.layers[self.layers.len() - 1].eta;
-                    let up = cosine_hemisphere(rng.uniform2());
-                    let (r, cos_t) = reflectance_and_cos_t(up.z, cfg.n_below, eta);
-                    if r >= 1.0 || (r > 0.0 && rng.uniform() < r) {
-                        continue;
+                    if let Some(up) = lambertian_up_into(rng, cfg.n_below, eta) {
+                        d = up;
+                        reflected = true;
+                        break;
                     }
-                    let k = cfg.n_below / eta;
-                    d = Vec3::new(up.x * k, up.y * k, -cos_t);
-                    reflected = true;
-                    break;
                 }
                 if !reflected {
                     return Ok(self.concentration(rec));
