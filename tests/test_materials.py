@@ -354,3 +354,29 @@ def test_cli_list_reads_at_80_columns(monkeypatch, capsys):
         resolved = M.get(name).name
         if resolved != name:
             assert f"= {resolved}" in rows[0]
+
+
+def test_an_extrapolation_past_the_coefficient_range_is_refused_naming_it(tmp_path):
+    """A steep power law carried far from its data is refused with the material, quantity and
+    wavelength named, never handed on as inf."""
+    import pytest
+    from dentalux import materials
+
+    path = tmp_path / "steep.toml"
+    path.write_text("""
+[materials.steep]
+extrapolate = true
+wavelength_nm = [400.0, 401.0]
+mua = [0.001, 1000000.0]
+mus = [1.0, 1000000.0]
+g = [0.9, 0.9]
+fd = [0.0, 0.0]
+n = [1.5, 1.5]
+[materials.steep.provenance]
+kind = "measured"
+source = "a test"
+""")
+    m = materials.load(path)["steep"]
+    assert m.at(400.5).mus < 1e6
+    with pytest.raises(ValueError, match=r"'steep': mus at 420 nm .* extrapolated"):
+        m.at([420.0, 450.0])

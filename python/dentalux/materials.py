@@ -131,6 +131,15 @@ class Material:
         }
         for q in ("g", "fd", "n"):
             out[q] = np.interp(lam1, self.wavelength_nm, getattr(self, q))
+        for q in ("mua", "mus"):  # a steep power law can leave the range far from its data
+            bad = ~(np.isfinite(out[q]) & (out[q] <= MAX_COEFFICIENT))
+            if np.any(bad):
+                at = float(lam1[np.argmax(bad)])
+                raise ValueError(
+                    f"material {self.name!r}: {q} at {at:g} nm = {out[q][np.argmax(bad)]:.3g}, "
+                    f"extrapolated from its data ({self.wavelength_nm[0]:g}-"
+                    f"{self.wavelength_nm[-1]:g} nm), is beyond the allowed {MAX_COEFFICIENT:g} "
+                    "1/mm: give data that reach these bands, or ask for bands inside them")
         if scalar:
             out = {k: float(v[0]) for k, v in out.items()}
         else:
@@ -273,7 +282,7 @@ def _power_interp(lam: np.ndarray, xs: np.ndarray, ys: np.ndarray,
     inside = (lam >= xs[0]) & (lam <= xs[-1])
     use = positive & (inside | extrapolate)
     if np.any(use):
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             b = np.log(y1 / y0) / np.log(x1 / x0)
             power = y0 * (lam / x0) ** b
         out = np.where(use, power, out)
