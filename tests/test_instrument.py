@@ -239,11 +239,14 @@ CENTRE_LIT = dict(illuminated_diameter_mm=1.2, viewed_diameter_mm=3.0,
                   viewed_inner_diameter_mm=2.0)
 
 
-@pytest.mark.parametrize("rings", [RING_LIT, CENTRE_LIT], ids=["ring-lit", "centre-lit"])
-def test_fibre_probe_reading_matches_brute_force(rings):
+@pytest.mark.parametrize("rings, walks", [(RING_LIT, "per-band"), (CENTRE_LIT, "per-band"),
+                                          (RING_LIT, "shared")],
+                         ids=["ring-lit", "centre-lit", "ring-lit-shared"])
+def test_fibre_probe_reading_matches_brute_force(rings, walks):
     """The reading engine (one walk per band, backing orders, entry point integrated out
-    over the lit ring by inclusion-exclusion of disc lenses) against the plain slab walk
-    sampling the entry over the lit region and counting exits inside the window."""
+    over the lit ring by inclusion-exclusion of disc lenses; or shared walks, entry sampled)
+    against the plain slab walk sampling the entry over the lit region and counting exits
+    inside the window."""
     from dentalux import reading
     from dentalux.spectra import resolve_bands
 
@@ -252,7 +255,7 @@ def test_fibre_probe_reading_matches_brute_force(rings):
     wl = resolve_bands(BANDS)
     stacks = reading.stacks([(SCATTERING, 1.0)], wl)
     got = reading.measure(stacks, wl, inst, np.zeros(len(wl)), np.full(len(wl), 0.9),
-                          40_000, seed=4)
+                          40_000, seed=4, walks=walks)
     for k, stack in enumerate(stacks):
         for j, rb in ((0, 0.0), (1, 0.9)):
             res = simulate(stack, n_photons=200_000, seed=9, band=k, estimator="weighted",
