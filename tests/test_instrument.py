@@ -7,6 +7,7 @@ with the discs' overlap, and Yu et al.'s finding that TP rises with the window.
 """
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -228,3 +229,123 @@ source = "a test disc"
     assert code in (0, None) and "tp" in out
     code, out, _ = _shade_json(capsys, ["enamel", "--bands", "380,780", "--photons", "500"])
     assert code in (0, None)
+
+
+# a fibre-optic contact probe: an illuminating ring of fibres around a central receiving
+# bundle (diameters in mm), and the reverse (a central source, a receiving ring)
+RING_LIT = dict(illuminated_diameter_mm=3.0, illuminated_inner_diameter_mm=2.0,
+                viewed_diameter_mm=1.2)
+CENTRE_LIT = dict(illuminated_diameter_mm=1.2, viewed_diameter_mm=3.0,
+                  viewed_inner_diameter_mm=2.0)
+
+
+@pytest.mark.parametrize("rings, walks", [(RING_LIT, "per-band"), (CENTRE_LIT, "per-band"),
+                                          (RING_LIT, "shared")],
+                         ids=["ring-lit", "centre-lit", "ring-lit-shared"])
+def test_fibre_probe_reading_matches_brute_force(rings, walks):
+    """The reading engine (one walk per band, backing orders, entry point integrated out
+    over the lit ring by inclusion-exclusion of disc lenses; or shared walks, entry sampled)
+    against the plain slab walk sampling the entry over the lit region and counting exits
+    inside the window."""
+    from dentalux import reading
+    from dentalux.spectra import resolve_bands
+
+    inst = instrument.Instrument(name="probe", geometry="0-d", **rings)
+    assert not inst.is_discs and not inst.white_normalised
+    wl = resolve_bands(BANDS)
+    stacks = reading.stacks([(SCATTERING, 1.0)], wl)
+    got = reading.measure(stacks, wl, inst, np.zeros(len(wl)), np.full(len(wl), 0.9),
+                          40_000, seed=4, walks=walks)
+    for k, stack in enumerate(stacks):
+        for j, rb in ((0, 0.0), (1, 0.9)):
+            res = simulate(stack, n_photons=200_000, seed=9, band=k, estimator="weighted",
+                           window=inst.window(rb, brute_force=True))
+            ref, ref_err = inst.reading(res.window, res.window_stderr, brute_force=True)
+            value, err = got.values[j, k], got.stderr[j, k]
+            assert value > 0.002 and ref > 0.002, (rings, rb, value, ref)
+            assert close(value, ref, err, ref_err), (rings, rb, BANDS[k], value, err, ref,
+                                                     ref_err)
+
+
+def test_a_ring_probe_is_read_through_dental_read():
+    inst = instrument.Instrument(name="probe", geometry="0-d", **RING_LIT)
+    m = dental.read([(SCATTERING, 1.0)], bands=BANDS, instrument=inst, photons=4000, seed=2,
+                    threads=2)
+    assert m.instrument["illuminated_inner_diameter_mm"] == 2.0
+    assert m.instrument["white_normalised"] is False
+    assert all(np.isfinite(m.lab_white)) and m.lab_white[0] > 0
+
+
+def test_rings_of_inner_diameter_zero_read_exactly_as_discs():
+    """Inner diameters 0 are today's discs: the same window tuple, the same reading to the
+    bit, and the same JSON (no ring keys)."""
+    disc = instrument.get("contact-probe-3mm")
+    zero = replace(disc, illuminated_inner_diameter_mm=0, viewed_inner_diameter_mm=0.0)
+    assert zero == disc and zero.window(0.9) == disc.window(0.9)
+    kw = dict(bands=BANDS, photons=2000, seed=3, threads=2)
+    a = dental.read([(SCATTERING, 1.0)], instrument=disc, **kw).to_json()
+    b = dental.read([(SCATTERING, 1.0)], instrument=zero, **kw).to_json()
+    for m in (a, b):
+        m.pop("cpu_seconds", None)
+    assert a == b
+
+
+def test_a_ring_is_lit_as_the_instrument_lights_it():
+    """Reciprocity's swap (light the smaller disc) is for discs only."""
+    inst = instrument.Instrument(name="p", geometry="0-d", **RING_LIT)
+    assert inst.window(0.5) == (1.0, 1.5, 0.0, 0.6, math.inf, 0.5, None)
+    assert inst.window(0.5) == inst.window(0.5, brute_force=True)
+    wide = instrument.Instrument(name="w", geometry="0-d", illuminated_diameter_mm=8.0,
+                                 viewed_diameter_mm=3.0)
+    assert wide.window(0.5)[:4] == (0.0, 1.5, 0.0, 4.0)
+    assert wide.window(0.5, brute_force=True)[:4] == (0.0, 4.0, 0.0, 1.5)
+    # overlapping rings are normalised by the lit area inside the window
+    over = instrument.Instrument(name="o", geometry="0-d", illuminated_diameter_mm=4.0,
+                                 illuminated_inner_diameter_mm=2.0, viewed_diameter_mm=3.0)
+    assert over.white_normalised
+    assert over.white_fraction() == pytest.approx((9 - 4) / (16 - 4))
+
+
+@pytest.mark.parametrize("field, value", [
+    ("illuminated_inner_diameter_mm", -0.5), ("illuminated_inner_diameter_mm", math.nan),
+    ("illuminated_inner_diameter_mm", 3.0), ("illuminated_inner_diameter_mm", 4.0),
+    ("viewed_inner_diameter_mm", -1.0), ("viewed_inner_diameter_mm", math.inf),
+    ("viewed_inner_diameter_mm", 1.2), ("viewed_inner_diameter_mm", "0.5"),
+])
+def test_bad_inner_diameters_are_refused_with_the_field_named(field, value):
+    with pytest.raises(ValueError, match=field):
+        instrument.Instrument(name="p", geometry="0-d", **{**RING_LIT, field: value})
+
+
+def test_bad_inner_diameter_in_a_toml_file_exits_2(tmp_path, capsys):
+    path = tmp_path / "probe.toml"
+    path.write_text('[instruments.probe]\ngeometry = "0-d"\nilluminated_diameter_mm = 3.0\n'
+                    'illuminated_inner_diameter_mm = 3.5\nviewed_diameter_mm = 1.2\n')
+    with pytest.raises(SystemExit) as exc:
+        main(["shade", "enamel", "--instrument", str(path), "--photons", "100"])
+    assert exc.value.code == 2
+    assert "illuminated_inner_diameter_mm" in capsys.readouterr().err
+    good = tmp_path / "ok.toml"
+    good.write_text('[instruments.probe]\ngeometry = "0-d"\nilluminated_diameter_mm = 3.0\n'
+                    'illuminated_inner_diameter_mm = 2.0\nviewed_diameter_mm = 1.2\n')
+    assert instrument.get(str(good)).illuminated_inner_diameter_mm == 2.0
+
+
+def test_a_ring_probe_and_its_reverse_are_reciprocal():
+    """Lighting the ring and reading the centre moves as much power per unit lit area as
+    lighting the centre and reading the ring (reciprocity: power A->B times area(A) is
+    symmetric for a laterally uniform specimen under uniform light)."""
+    from dentalux import reading
+    from dentalux.spectra import resolve_bands
+
+    wl = resolve_bands([550])
+    stacks = reading.stacks([(SCATTERING, 1.0)], wl)
+    out = []
+    for rings in (RING_LIT, CENTRE_LIT):
+        inst = instrument.Instrument(name="probe", geometry="0-d", **rings)
+        got = reading.measure(stacks, wl, inst, np.zeros(1), np.full(1, 0.9), 40_000, seed=6)
+        a, a0 = inst.illuminated_diameter_mm / 2, inst.illuminated_inner_diameter_mm / 2
+        area = math.pi * (a * a - a0 * a0)
+        out.append((got.values[1, 0] * area, got.stderr[1, 0] * area))
+    (x, sx), (y, sy) = out
+    assert close(x, y, sx, sy), out

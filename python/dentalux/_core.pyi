@@ -20,9 +20,10 @@ TRANSMITTED_RUN_KEY: int
 # One layer as Python passes it: dentalux.slab.Layer's fields in their order (mua, mus, g, n,
 # thickness, fd, lobes), built by Layer.as_tuple.
 LayerTuple = tuple[float, float, float, float, float, float, list[tuple[float, float]] | None]
-# An instrument window: (illuminated radius, viewed radius, specimen radius [mm], backing
-# reflectance, detector cone (low, high) [deg] or None).
-WindowTuple = tuple[float, float, float, float, tuple[float, float] | None]
+# An instrument window: (illuminated inner radius, illuminated radius, viewed inner radius,
+# viewed radius, specimen radius [mm], backing reflectance, detector cone (low, high) [deg]
+# or None). Inner radii 0 are discs; others make rings (annuli).
+WindowTuple = tuple[float, float, float, float, float, float, tuple[float, float] | None]
 
 def slab_simulate(
     layers: list[LayerTuple],

@@ -6,7 +6,10 @@ the black and white backings, an air gap or an optical-contact fluid between spe
 backing, and optionally the specimen's own diameter. The slab simulator in the core runs
 with that geometry inside the walk (:mod:`dentalux_core::instrument`): photons enter
 uniformly over the lit disc, the backing lies under the specimen, and light is read only
-where it leaves inside the window. Light that leaves elsewhere is the edge loss.
+where it leaves inside the window. Light that leaves elsewhere is the edge loss. The lit
+region and the window may be rings (``illuminated_inner_diameter_mm``,
+``viewed_inner_diameter_mm``): a fibre-optic probe's illuminating ring around a central
+receiving bundle, or the reverse (docs/instruments.md, "A fibre-optic probe").
 
 Geometries, each simulated in its reciprocal form (same reading for a reciprocal specimen,
 far fewer photons for a narrow detector):
@@ -79,7 +82,10 @@ GEOMETRIES = {
 CLASSES = ("clinical-contact-probe", "benchtop-d8", "noncontact-45-0", "imaging", "custom",
            "idealised")
 KEYS = ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm", "backing_black",
-        "backing_white", "contact_index", "specimen_diameter_mm")
+        "backing_white", "contact_index", "specimen_diameter_mm",
+        "illuminated_inner_diameter_mm", "viewed_inner_diameter_mm")
+#: the inner diameters that make the lit region or the window a ring (annulus): 0 is a disc
+INNER_KEYS = ("illuminated_inner_diameter_mm", "viewed_inner_diameter_mm")
 
 
 def _number(name: str, value, lo: float, lo_open: bool, hi: float = math.inf,
@@ -123,9 +129,30 @@ def _backing(name: str, value):
     return _number(name, value, 0.0, False, 1.0)
 
 
+def _inner(name: str, value, outer: float, outer_name: str) -> float:
+    """An inner diameter [mm]: 0 (a disc) or a finite number in [0, outer) (a ring whose outer
+    diameter is ``outer``, the field ``outer_name``); a ValueError naming it otherwise."""
+    if math.isinf(outer):
+        hi_text = "0 (the 'infinite' geometry has no rings)"
+        if isinstance(value, Real) and not isinstance(value, bool) and float(value) == 0.0:
+            return 0.0
+        raise ValueError(f"{name} = {value!r} is out of range: allowed {hi_text}")
+    x = inputs.number(value, name, 0.0, None, unit="mm")
+    if not x < outer:
+        raise ValueError(f"{name} = {x:g} mm is out of range: allowed [0, {outer:g}) mm, "
+                         f"smaller than {outer_name} = {outer:g} mm (0 for a disc)")
+    return x
+
+
 @dataclass(frozen=True)
 class Instrument:
-    """One instrument's measuring geometry (diameters in mm at the specimen)."""
+    """One instrument's measuring geometry (diameters in mm at the specimen).
+
+    The lit region and the window are concentric discs, or rings where an inner diameter is
+    given (``illuminated_inner_diameter_mm``, ``viewed_inner_diameter_mm``; 0 is a disc): a
+    fibre-optic contact probe lights a ring of fibres and reads a central bundle, or the
+    reverse.
+    """
 
     name: str
     geometry: str = "0-45"
@@ -138,6 +165,8 @@ class Instrument:
     description: str = ""
     provenance: dict = field(default_factory=dict, compare=False)
     instrument_class: str = "custom"
+    illuminated_inner_diameter_mm: float = 0.0
+    viewed_inner_diameter_mm: float = 0.0
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name:
@@ -172,6 +201,13 @@ class Instrument:
                     f"{spec:g}: the window would look past the specimen (allowed "
                     f"viewed_diameter_mm <= {spec:g})")
             fields["specimen_diameter_mm"] = spec
+        lit_outer = ill if self.specimen_diameter_mm is None else min(
+            ill, fields["specimen_diameter_mm"])
+        for key, outer, what in (
+                ("illuminated_inner_diameter_mm", lit_outer,
+                 "illuminated_diameter_mm" if lit_outer == ill else "specimen_diameter_mm"),
+                ("viewed_inner_diameter_mm", view, "viewed_diameter_mm")):
+            fields[key] = _inner(key, getattr(self, key), outer, what)
         if not isinstance(self.description, str):
             raise ValueError(f"description = {self.description!r}: must be a string")
         if not isinstance(self.provenance, dict):
@@ -198,26 +234,60 @@ class Instrument:
             return self.illuminated_diameter_mm
         return min(self.illuminated_diameter_mm, self.specimen_diameter_mm)
 
-    def window(self, backing: float, brute_force: bool = False) -> tuple:
-        """The core's window tuple for one run with a backing of reflectance ``backing``.
+    @property
+    def is_discs(self) -> bool:
+        """Whether the lit region and the window are both discs (no inner diameter)."""
+        return self.illuminated_inner_diameter_mm == 0.0 and self.viewed_inner_diameter_mm == 0.0
 
-        The normalised reading is symmetric in the two diameters (reciprocity, and the
-        rotational symmetry of a normal beam read over a ring or a hemisphere), so the run
-        lights the smaller disc and reads the larger: every photon then counts towards the
-        reading, instead of (b/a)^2 of them for a small view in wide light. ``brute_force``
-        lights the lit disc and reads the window as the instrument does (for checks).
+    def window(self, backing: float, brute_force: bool = False) -> tuple:
+        """The core's window tuple for one run with a backing of reflectance ``backing``:
+        (lit inner radius, lit radius, viewed inner radius, viewed radius, specimen radius,
+        backing, cone).
+
+        For two discs the normalised reading is symmetric in the two diameters (reciprocity,
+        and the rotational symmetry of a normal beam read over a ring or a hemisphere), so the
+        run lights the smaller disc and reads the larger: every photon then counts towards
+        the reading, instead of (b/a)^2 of them for a small view in wide light.
+        ``brute_force`` lights the lit disc and reads the window as the instrument does (for
+        checks). Rings are lit and read as the instrument does (no swap): the normalisation
+        by an ideal white is not symmetric for them.
         """
         spec = math.inf if self.specimen_diameter_mm is None else self.specimen_diameter_mm / 2
         a, b = self.lit_diameter_mm / 2, self.viewed_diameter_mm / 2
-        if not brute_force:
-            a, b = min(a, b), max(a, b)
-        return (a, b, spec, float(backing), self.spec.cone_deg)
+        if self.is_discs:
+            if not brute_force:
+                a, b = min(a, b), max(a, b)
+            return (0.0, a, 0.0, b, spec, float(backing), self.spec.cone_deg)
+        a0 = self.illuminated_inner_diameter_mm / 2
+        b0 = self.viewed_inner_diameter_mm / 2
+        return (a0, a, b0, b, spec, float(backing), self.spec.cone_deg)
+
+    @property
+    def white_normalised(self) -> bool:
+        """Whether an ideal Lambertian white lit like the specimen sends light through the
+        window, so that the reading is a reflectance factor. A probe whose lit ring and read
+        centre do not overlap has none: its reading is then the fraction of the incident
+        power leaving inside the window (a real probe calibrates on a white reference tile,
+        which dentalux does not model yet)."""
+        return self._white_overlap() > 0.0
+
+    def _white_overlap(self) -> float:
+        """Lit area inside the window over the lit area (rings concentric at the centre)."""
+        a, b = self.lit_diameter_mm, self.viewed_diameter_mm
+        a0, b0 = self.illuminated_inner_diameter_mm, self.viewed_inner_diameter_mm
+        lo, hi = max(a0, b0), min(a, b)
+        return 0.0 if hi <= lo else (hi**2 - lo**2) / (a**2 - a0**2)
 
     def white_fraction(self, brute_force: bool = False) -> float:
-        """Power an ideal Lambertian white sends through the run's window: min(a, b)^2 / a^2
-        (1 when the run lights the smaller disc)."""
+        """Power an ideal Lambertian white sends through the run's window, the reading's
+        normaliser: for discs min(a, b)^2 / a^2 (1 when the run lights the smaller disc); for
+        rings the lit area inside the window over the lit area, or 1 where they do not
+        overlap (the fraction of the incident power; see :attr:`white_normalised`)."""
         a, b = self.lit_diameter_mm, self.viewed_diameter_mm
-        return 1.0 if a <= b or not brute_force else (b / a) ** 2
+        if self.is_discs:
+            return 1.0 if a <= b or not brute_force else (b / a) ** 2
+        f = self._white_overlap()
+        return f if f > 0.0 else 1.0
 
     def reading(self, window: dict, stderr: dict, brute_force: bool = False
                 ) -> tuple[float, float]:
@@ -250,6 +320,11 @@ class Instrument:
             "backing_black": backing(self.backing_black),
             "backing_white": backing(self.backing_white),
             "specimen_diameter_mm": self.specimen_diameter_mm,
+            # rings only: a disc instrument's object is as it was before rings existed
+            **({} if self.is_discs else {
+                "illuminated_inner_diameter_mm": self.illuminated_inner_diameter_mm,
+                "viewed_inner_diameter_mm": self.viewed_inner_diameter_mm,
+                "white_normalised": self.white_normalised}),
         }
 
     def override(self, **changes) -> Instrument:
@@ -357,6 +432,12 @@ def _from_table(name: str, table: dict, where: str, builtin: bool = False) -> In
             description=inputs.text(table.get("description", ""), f"{key}.description"),
             provenance=dict(provenance),
             instrument_class=klass,
+            illuminated_inner_diameter_mm=_number(
+                f"{key}.illuminated_inner_diameter_mm",
+                table.get("illuminated_inner_diameter_mm", 0.0), 0.0, False),
+            viewed_inner_diameter_mm=_number(
+                f"{key}.viewed_inner_diameter_mm",
+                table.get("viewed_inner_diameter_mm", 0.0), 0.0, False),
         )
     except ValueError as exc:
         msg = str(exc)

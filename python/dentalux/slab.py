@@ -114,6 +114,22 @@ def parse_incidence(incidence: str) -> tuple[str, float]:
     )
 
 
+def window_tuple(window: tuple | None) -> tuple | None:
+    """The core's seven-element window tuple from ``window`` (the seven elements, or the
+    five-element form of two discs: inner radii 0)."""
+    if window is None:
+        return None
+    if not isinstance(window, (tuple, list)) or len(window) not in (5, 7):
+        raise ValueError(f"window = {window!r}: expected (illuminated_inner_radius, "
+                         "illuminated_radius, viewed_inner_radius, viewed_radius, "
+                         "specimen_radius, backing, cone) or (illuminated_radius, "
+                         "viewed_radius, specimen_radius, backing, cone)")
+    if len(window) == 5:
+        a, b, spec, backing, cone = window
+        return (0.0, a, 0.0, b, spec, backing, cone)
+    return tuple(window)
+
+
 def simulate(
     layers: list[Layer],
     n_photons: int = 100_000,
@@ -132,11 +148,15 @@ def simulate(
     """Simulate a layered slab lit from above; see :class:`SlabResult`.
 
     ``radial=(bins, r_max_mm)`` adds R(r), T(r) per unit area [1/mm^2]; ``angular_bins``
-    adds exit-angle histograms over [0, 90) degrees. ``window=(illuminated_radius,
-    viewed_radius, specimen_radius, backing, cone)`` puts an instrument's lit spot, window
-    [mm], backing reflectance and detector cone ((low, high) degrees or None) into the run
-    (see :mod:`dentalux.instrument`); its tallies come back in ``window``. The same ``seed``
-    gives the same numbers for any ``threads``.
+    adds exit-angle histograms over [0, 90) degrees. ``window=(illuminated_inner_radius,
+    illuminated_radius, viewed_inner_radius, viewed_radius, specimen_radius, backing, cone)``
+    puts an instrument's lit region, window [mm], backing reflectance and detector cone
+    ((low, high) degrees or None) into the run (see :mod:`dentalux.instrument`): photons
+    enter uniformly over the lit disc (inner radius 0) or ring, and an exit is read when its
+    distance from the centre lies in [viewed_inner_radius, viewed_radius]. The five-element
+    form ``(illuminated_radius, viewed_radius, specimen_radius, backing, cone)`` is the two
+    discs. Its tallies come back in ``window``. The same ``seed`` gives the same numbers for
+    any ``threads``.
     """
     if isinstance(layers, Layer):
         layers = [layers]
@@ -149,6 +169,7 @@ def simulate(
     n_photons = limits.check_slab(n_photons, threads, radial[0] if radial else None,
                                   angular_bins, seed=seed, band=band)
     seed = int(seed)
+    window = window_tuple(window)
     kind, deg = parse_incidence(incidence)
     # rayon's default pool follows the CPUs this process may run on
     n_threads = threads or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")

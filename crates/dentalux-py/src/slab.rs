@@ -28,9 +28,10 @@ pub fn phase_from(
 /// One layer as Python passes it: `dentalux.slab.Layer`'s fields in their order (mua, mus,
 /// g, n, thickness, fd, lobes).
 type LayerTuple = (f64, f64, f64, f64, f64, f64, Option<Vec<(f64, f64)>>);
-/// An instrument window as Python passes it: (illuminated radius, viewed radius, specimen
-/// radius [mm], backing reflectance, detector cone (low, high) [deg] or None).
-type WindowTuple = (f64, f64, f64, f64, Option<(f64, f64)>);
+/// An instrument window as Python passes it: (illuminated inner radius, illuminated radius,
+/// viewed inner radius, viewed radius, specimen radius [mm], backing reflectance, detector
+/// cone (low, high) [deg] or None). Inner radii 0 are discs; others make rings.
+type WindowTuple = (f64, f64, f64, f64, f64, f64, Option<(f64, f64)>);
 
 /// Simulate a layered slab; returns a dict of the results (see `dentalux.slab`).
 #[pyfunction]
@@ -101,10 +102,12 @@ pub fn slab_simulate<'py>(
 }
 
 /// The core's window from Python's tuple (cone in degrees).
-fn window_from((a, b, rs, backing, cone): WindowTuple) -> Window {
+fn window_from((a0, a, b0, b, rs, backing, cone): WindowTuple) -> Window {
     Window {
         illuminated_radius: a,
+        illuminated_inner_radius: a0,
         viewed_radius: b,
+        viewed_inner_radius: b0,
         specimen_radius: rs,
         backing,
         cone: cone.map(|(lo, hi)| (lo.to_radians(), hi.to_radians())),

@@ -497,6 +497,24 @@ impl HgSampler {
 }
 
 /// One photon's contributions to every per-photon tally.
+/// A point uniform over the lit region of `win` (the origin for a pencil beam): over the
+/// disc of radius a as r = a √u, over the ring [a₀, a] as r = √(a₀² + u (a² − a₀²)).
+#[inline]
+pub(crate) fn entry_point(win: &Window, rng: &mut Stream) -> Vec3 {
+    if win.illuminated_radius <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let (c, s, rho) = sample_azimuth_scaled_bits(|| rng.next_bits());
+    let a = win.illuminated_radius;
+    let a0 = win.illuminated_inner_radius;
+    let r = if a0 == 0.0 {
+        a * rng.uniform().sqrt() / rho
+    } else {
+        (a0 * a0 + rng.uniform() * (a * a - a0 * a0)).sqrt() / rho
+    };
+    Vec3::new(r * c, r * s, 0.0)
+}
+
 type Photon = [f64; N_TALLIES];
 /// Most Lambertian bounces of one visit to the backing before the photon is given up to it.
 const MAX_BACKING_BOUNCES: usize = 10_000;
@@ -672,7 +690,7 @@ impl<'a> Tracer<'a> {
             }
         }
         let r2 = pos.x * pos.x + pos.y * pos.y;
-        if r2 <= win.viewed_radius * win.viewed_radius {
+        if win.in_window(r2) {
             1.0
         } else {
             0.0
@@ -725,14 +743,10 @@ impl<'a> Tracer<'a> {
             Incidence::Angle(theta) => Vec3::new(theta.sin(), 0.0, theta.cos()),
             Incidence::Diffuse => cosine_hemisphere(rng.uniform2()),
         };
-        // entry point: uniform over the lit disc of a window, else the origin
+        // entry point: uniform over the lit disc or ring of a window, else the origin
         let mut pos = Vec3::ZERO;
         if let Some(win) = &cfg.window {
-            if win.illuminated_radius > 0.0 {
-                let (c, s, rho) = sample_azimuth_scaled_bits(|| rng.next_bits());
-                let r = win.illuminated_radius * rng.uniform().sqrt() / rho;
-                pos = Vec3::new(r * c, r * s, 0.0);
-            }
+            pos = entry_point(win, rng);
         }
         t.entry = (pos.x, pos.y);
         let eta0 = self.layers[0].eta;

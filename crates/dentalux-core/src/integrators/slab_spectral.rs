@@ -27,7 +27,7 @@
 //! band weight has fallen below [`ROULETTE_WEIGHT`] continues by Russian roulette.
 
 use super::slab::{
-    batch_size, lambertian_up_into, BackingOrders, Incidence, SlabLayer, REPLICATES,
+    batch_size, entry_point, lambertian_up_into, BackingOrders, Incidence, SlabLayer, REPLICATES,
 };
 use crate::control::Control;
 use crate::error::{check_range, Error, Result};
@@ -323,7 +323,7 @@ impl<'a> Tracer<'a> {
         w: f64,
     ) -> bool {
         let win = &self.cfg.window;
-        let inside = pos.x * pos.x + pos.y * pos.y <= win.viewed_radius * win.viewed_radius;
+        let inside = win.in_window(pos.x * pos.x + pos.y * pos.y);
         if top || inside {
             self.weights(rec);
         }
@@ -368,13 +368,7 @@ impl<'a> Tracer<'a> {
             Incidence::Angle(theta) => Vec3::new(theta.sin(), 0.0, theta.cos()),
             _ => Vec3::Z,
         };
-        let mut pos = Vec3::ZERO;
-        let win = cfg.window;
-        if win.illuminated_radius > 0.0 {
-            let (c, s, rho) = sample_azimuth_scaled_bits(|| rng.next_bits());
-            let r = win.illuminated_radius * rng.uniform().sqrt() / rho;
-            pos = Vec3::new(r * c, r * s, 0.0);
-        }
+        let mut pos = entry_point(&cfg.window, rng);
         let n_layers = self.layers.len() as isize;
         let eta0 = self.layers[0].eta;
         let (r0, cos_t0) = reflectance_and_cos_t(d_above.z, cfg.n_above, eta0);
@@ -620,7 +614,9 @@ mod tests {
             key: 0,
             window: Window {
                 illuminated_radius: 1.5,
+                illuminated_inner_radius: 0.0,
                 viewed_radius: 1.5,
+                viewed_inner_radius: 0.0,
                 specimen_radius: f64::INFINITY,
                 backing: 0.0,
                 cone: None,
