@@ -57,7 +57,7 @@ pub fn batch_size(n_photons: u64) -> u64 {
 /// Below this weight the weighted estimator switches to the energy-exact roulette.
 const WEIGHT_THRESHOLD: f64 = 1e-4;
 /// A photon with more interactions than this means an input Monte Carlo cannot finish.
-const MAX_EVENTS: u64 = 50_000_000;
+pub(crate) const MAX_EVENTS: u64 = 50_000_000;
 
 /// One layer of the slab.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -162,6 +162,20 @@ pub struct BackingOrders {
     pub max_order: usize,
     /// Probability of continuing after a backing reflection, in (0, 1].
     pub survival: f64,
+}
+
+impl BackingOrders {
+    /// Check the highest order and the survival probability; messages name the field and
+    /// its allowed range.
+    pub fn validate(&self) -> Result<()> {
+        if self.max_order == 0 || self.max_order > MAX_BACKING_ORDER {
+            return Err(Error::InvalidInput(format!(
+                "backing max_order = {} is out of range: allowed [1, {MAX_BACKING_ORDER}]",
+                self.max_order
+            )));
+        }
+        check_range("backing survival", self.survival, 0.0, true, 1.0, false, "")
+    }
 }
 
 /// Most replicates (groups of consecutive batches) a backing-order run returns.
@@ -302,13 +316,7 @@ impl SlabConfig {
                     "backing orders need an instrument window".into(),
                 ));
             }
-            if o.max_order == 0 || o.max_order > MAX_BACKING_ORDER {
-                return Err(Error::InvalidInput(format!(
-                    "backing max_order = {} is out of range: allowed [1, {MAX_BACKING_ORDER}]",
-                    o.max_order
-                )));
-            }
-            check_range("backing survival", o.survival, 0.0, true, 1.0, false, "")?;
+            o.validate()?;
         }
         Ok(())
     }
@@ -430,6 +438,19 @@ pub fn simulate_all(cfgs: &[SlabConfig], control: &Control) -> Result<Vec<SlabRe
     cfgs.par_iter().map(|cfg| simulate(cfg, control)).collect()
 }
 
+/// Distance along a direction with z component `dz` from depth `z` to the face of the layer
+/// [`z_top`, `z_bot`] it is heading for (+∞ when it runs parallel to them).
+#[inline]
+pub(crate) fn distance_to_faces(z: f64, dz: f64, z_top: f64, z_bot: f64) -> f64 {
+    if dz > 0.0 {
+        (z_bot - z) / dz
+    } else if dz < 0.0 {
+        (z_top - z) / dz
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// A Lambertian reflection off a backing in a medium of index `n_below`: a cosine-weighted
 /// direction up, refracted into the bottom layer (index `eta`), or `None` when the Fresnel
 /// roulette sends it back down onto the backing.
@@ -517,7 +538,7 @@ pub(crate) fn entry_point(win: &Window, rng: &mut Stream) -> Vec3 {
 
 type Photon = [f64; N_TALLIES];
 /// Most Lambertian bounces of one visit to the backing before the photon is given up to it.
-const MAX_BACKING_BOUNCES: usize = 10_000;
+pub(crate) const MAX_BACKING_BOUNCES: usize = 10_000;
 
 /// Precomputed geometry of the stack plus the photon walk.
 struct Tracer<'a> {
@@ -774,13 +795,7 @@ impl<'a> Tracer<'a> {
             let lc = &self.layers[li];
             // free flight (eq. 2); +∞ in a non-interacting layer
             let s = -rng.uniform_open0().ln() * lc.mfp;
-            let db = if d.z > 0.0 {
-                (lc.z_bot - pos.z) / d.z
-            } else if d.z < 0.0 {
-                (lc.z_top - pos.z) / d.z
-            } else {
-                f64::INFINITY
-            };
+            let db = distance_to_faces(pos.z, d.z, lc.z_top, lc.z_bot);
             events += 1;
             if events & 0xFFFF == 0 {
                 control.check()?;

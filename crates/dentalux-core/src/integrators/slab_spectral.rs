@@ -27,7 +27,8 @@
 //! band weight has fallen below [`ROULETTE_WEIGHT`] continues by Russian roulette.
 
 use super::slab::{
-    batch_size, entry_point, lambertian_up_into, BackingOrders, Incidence, SlabLayer, REPLICATES,
+    batch_size, distance_to_faces, entry_point, lambertian_up_into, BackingOrders, Incidence,
+    SlabLayer, MAX_BACKING_BOUNCES, MAX_EVENTS, REPLICATES,
 };
 use crate::control::Control;
 use crate::error::{check_range, Error, Result};
@@ -44,10 +45,6 @@ use rayon::prelude::*;
 pub const ROULETTE_WEIGHT: f64 = 1e-3;
 /// Collisions between two checks of the walk's band weights for the roulette.
 const ROULETTE_EVERY: u32 = 64;
-/// A walk with more collisions than this means an input the Monte Carlo cannot finish.
-const MAX_EVENTS: u64 = 50_000_000;
-/// Most Lambertian bounces of one visit to the backing.
-const MAX_BACKING_BOUNCES: usize = 10_000;
 const N_KEYS: usize = instrument::WINDOW_KEYS.len();
 
 /// A specimen read in every band by shared walks.
@@ -138,14 +135,7 @@ impl SpectralConfig {
             ));
         }
         self.window.validate()?;
-        let o = &self.orders;
-        if o.max_order == 0 || o.max_order > super::slab::MAX_BACKING_ORDER {
-            return Err(Error::InvalidInput(format!(
-                "backing max_order = {} is out of range",
-                o.max_order
-            )));
-        }
-        check_range("backing survival", o.survival, 0.0, true, 1.0, false, "")
+        self.orders.validate()
     }
 }
 
@@ -395,13 +385,7 @@ impl<'a> Tracer<'a> {
             } else {
                 f64::INFINITY
             };
-            let db = if d.z > 0.0 {
-                (lb.z_bot - pos.z) / d.z
-            } else if d.z < 0.0 {
-                (lb.z_top - pos.z) / d.z
-            } else {
-                f64::INFINITY
-            };
+            let db = distance_to_faces(pos.z, d.z, lb.z_top, lb.z_bot);
             events += 1;
             if events & 0xFFFF == 0 {
                 control.check()?;
