@@ -4,6 +4,7 @@ FILE.csv:TAB and imported names on design, the instrument note, and bad guides (
 import json
 
 import pytest
+from cli_run import run_main
 from dentalux import shade_guides
 from dentalux.cli import main
 from dentalux.design import targets
@@ -14,14 +15,7 @@ GUIDE = ("tab,L,a,b,instrument,source,date\n"
          "A3,71.0,2.0,20.0,contact-probe-3mm,our lab,2026-12-01\n")
 
 
-def run(capsys, *args):
-    try:
-        main([str(a) for a in args])
-        code = 0
-    except SystemExit as exc:
-        code = exc.code or 0
-    out = capsys.readouterr()
-    return code, out.out, out.err
+run = run_main  # the command line in process: (exit code, stdout, stderr)
 
 
 @pytest.fixture

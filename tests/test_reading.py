@@ -11,6 +11,7 @@ import json
 
 import numpy as np
 import pytest
+from cli_run import run_main
 from dentalux import dental, instrument, reading
 from dentalux.slab import simulate
 from dentalux.spectra import resolve_bands
@@ -88,34 +89,26 @@ def test_precision_chooses_the_photons_and_reaches_it():
     assert p["achieved"] < 1.25 * p["requested"], p
 
 
-def _cli(args, capsys):
-    from dentalux.cli import main
-
-    with pytest.raises(SystemExit) as exc:
-        main(args)
-    return exc.value.code, capsys.readouterr()
-
-
 @pytest.mark.parametrize("bad", ["0", "-0.1", "nan", "inf"])
 def test_bad_precision_is_refused_naming_the_field(bad, capsys):
-    code, out = _cli(["shade", "enamel", "--bands", "550", "--precision", bad, "--json"],
-                     capsys)
+    code, _, err = run_main(capsys, "shade", "enamel", "--bands", "550", "--precision", bad,
+                            "--json")
     assert code == 2
-    assert "precision" in out.err and "allowed" in out.err
+    assert "precision" in err and "allowed" in err
 
 
 def test_a_precision_past_the_ceiling_is_refused_with_its_estimate(capsys):
-    code, out = _cli(["shade", "enamel", "--bands", "550", "--precision", "1e-5", "--json"],
-                     capsys)
+    code, _, err = run_main(capsys, "shade", "enamel", "--bands", "550", "--precision", "1e-5",
+                            "--json")
     assert code == 2
-    assert "would need about" in out.err and "photons" in out.err and "CPU-s" in out.err
+    assert "would need about" in err and "photons" in err and "CPU-s" in err
 
 
 def test_shade_json_carries_stderr_under_the_values_keys(capsys):
-    code, out = _cli(["shade", "enamel", "--bands", "450,550,650", "--photons", "2000",
-                      "--json"], capsys)
+    code, out, _ = run_main(capsys, "shade", "enamel", "--bands", "450,550,650", "--photons",
+                            "2000", "--json")
     assert code in (0, None)
-    d = json.loads(out.out)
+    d = json.loads(out)
     for key in ("lab_black", "lab_white", "lab_transmitted", "tp", "tp00", "cr", "op"):
         assert key in d["stderr"]
         assert np.shape(d["stderr"][key]) == np.shape(d[key])
@@ -155,10 +148,10 @@ def test_shared_walks_match_one_walk_per_band():
 def test_command_line_and_api_read_through_the_same_default(capsys):
     """`dentalux shade X` and `dental.metrics(X)` give the same numbers for the same seed:
     one default instrument for both."""
-    code, out = _cli(["shade", "enamel", "--bands", "450,550,650", "--photons", "1500",
-                      "--json"], capsys)
+    code, out, _ = run_main(capsys, "shade", "enamel", "--bands", "450,550,650", "--photons",
+                            "1500", "--json")
     assert code in (0, None)
-    cli = json.loads(out.out)
+    cli = json.loads(out)
     api = dental.metrics("enamel", 1.0, bands=BANDS, photons=1500).to_json()
     assert cli["instrument"]["name"] == instrument.DEFAULT == api["instrument"]["name"]
     for key in ("lab_black", "lab_white", "tp00", "cr", "stderr"):

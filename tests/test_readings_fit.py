@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from cli_run import run_main
 from dentalux import dental, instrument, readings
-from dentalux.cli import main
 from dentalux.color import delta_e00
 from dentalux.inverse import readings_fit as rf
 
@@ -29,15 +29,7 @@ source = "test"
 """
 
 
-def run(capsys, *args):
-    """The command line in process: (exit code, stdout, stderr)."""
-    try:
-        main([str(a) for a in args])
-        code = 0
-    except SystemExit as exc:
-        code = exc.code or 0
-    out = capsys.readouterr()
-    return code, out.out, out.err
+run = run_main  # the command line in process: (exit code, stdout, stderr)
 
 
 GOOD = ("thickness_mm,backing,L,a,b\n0.5,black,40,-1,2\n0.5,white,70,1,8\n"
