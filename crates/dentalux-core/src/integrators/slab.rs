@@ -451,6 +451,28 @@ pub(crate) fn distance_to_faces(z: f64, dz: f64, z_top: f64, z_bot: f64) -> f64 
     }
 }
 
+/// Count one event of a walk: every 65 536 events poll for cancellation, and refuse a walk
+/// past [`MAX_EVENTS`] (`layer` names where it was, for the message).
+#[inline]
+pub(crate) fn count_event(
+    events: &mut u64,
+    control: &Control,
+    layer: impl FnOnce() -> String,
+) -> Result<()> {
+    *events += 1;
+    if *events & 0xFFFF == 0 {
+        control.check()?;
+        if *events > MAX_EVENTS {
+            return Err(Error::InvalidInput(format!(
+                "a photon exceeded {MAX_EVENTS} interactions: the slab is too thick optically \
+                 for Monte Carlo ({})",
+                layer()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// A Lambertian reflection off a backing in a medium of index `n_below`: a cosine-weighted
 /// direction up, refracted into the bottom layer (index `eta`), or `None` when the Fresnel
 /// roulette sends it back down onto the backing.
@@ -796,17 +818,12 @@ impl<'a> Tracer<'a> {
             // free flight (eq. 2); +∞ in a non-interacting layer
             let s = -rng.uniform_open0().ln() * lc.mfp;
             let db = distance_to_faces(pos.z, d.z, lc.z_top, lc.z_bot);
-            events += 1;
-            if events & 0xFFFF == 0 {
-                control.check()?;
-                if events > MAX_EVENTS {
-                    return Err(Error::InvalidInput(format!(
-                        "a photon exceeded {MAX_EVENTS} interactions: the slab is too thick \
-                         optically for Monte Carlo (layers[{li}] μt·d = {:.3e})",
-                        lc.sigma_t * (lc.z_bot - lc.z_top)
-                    )));
-                }
-            }
+            count_event(&mut events, control, || {
+                format!(
+                    "layers[{li}] μt·d = {:.3e}",
+                    lc.sigma_t * (lc.z_bot - lc.z_top)
+                )
+            })?;
             if s < db {
                 // interaction inside layer li (eqs. 2–4)
                 pos += d * s;

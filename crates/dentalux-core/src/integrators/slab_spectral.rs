@@ -27,8 +27,8 @@
 //! band weight has fallen below [`ROULETTE_WEIGHT`] continues by Russian roulette.
 
 use super::slab::{
-    batch_size, distance_to_faces, entry_point, lambertian_up_into, BackingOrders, Incidence,
-    SlabLayer, MAX_BACKING_BOUNCES, MAX_EVENTS, REPLICATES,
+    batch_size, count_event, distance_to_faces, entry_point, lambertian_up_into, BackingOrders,
+    Incidence, SlabLayer, MAX_BACKING_BOUNCES, REPLICATES,
 };
 use crate::control::Control;
 use crate::error::{check_range, Error, Result};
@@ -386,16 +386,7 @@ impl<'a> Tracer<'a> {
                 f64::INFINITY
             };
             let db = distance_to_faces(pos.z, d.z, lb.z_top, lb.z_bot);
-            events += 1;
-            if events & 0xFFFF == 0 {
-                control.check()?;
-                if events > MAX_EVENTS {
-                    return Err(Error::InvalidInput(format!(
-                        "a photon exceeded {MAX_EVENTS} interactions: the slab is too thick \
-                         optically for Monte Carlo (layers[{li}])"
-                    )));
-                }
-            }
+            count_event(&mut events, control, || format!("layers[{li}]"))?;
             if s < db {
                 pos += d * s;
                 rec.length[li] += s;
