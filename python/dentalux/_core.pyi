@@ -16,6 +16,7 @@ SLAB_WINDOW_KEYS: list[str]
 # random-stream keys of the reading engine's diffuse and transmitted runs (dentalux.reading)
 DIFFUSE_RUN_KEY: int
 TRANSMITTED_RUN_KEY: int
+RIM_RUN_KEY: int
 
 # One layer as Python passes it: dentalux.slab.Layer's fields in their order (mua, mus, g, n,
 # thickness, fd, lobes), built by Layer.as_tuple.
@@ -56,6 +57,7 @@ def slab_read_bands(
     estimator: str = "weighted",
     threads: int | None = None,
     progress: Callable[[int], None] | None = None,
+    past_rim_only: bool = False,
 ) -> dict[str, Any]: ...
 def slab_read_spectral(
     bands: list[list[LayerTuple]],

@@ -57,7 +57,8 @@ TPT, TAT = 0.62, 2.62  # ΔTP00 50:50 % perceptibility / acceptability threshold
 # the keys of `dentalux shade --json` (DentalMetrics.to_json): the values, their standard
 # errors under the same keys in `stderr`, the cost, and the spectra as the instrument reads them
 JSON_KEYS = ("lab_black", "lab_white", "lab_transmitted", "tp", "tp00", "cr", "op",
-             "instrument", "edge_loss", "stderr", "cpu_seconds", "photons", "wavelength_nm",
+             "instrument", "edge_loss", "stderr", "cpu_seconds", "photons", "method",
+             "wavelength_nm",
              "reflectance_black", "reflectance_white", "reflectance_black_stderr",
              "reflectance_white_stderr")
 DEFAULT_PHOTONS = 20_000
@@ -109,6 +110,8 @@ class DentalMetrics:
     seconds: float = 0.0
     cpu_seconds: float = 0.0
     method: str = ""
+    # the part of cpu_seconds that does not grow with photons (the layered solver's)
+    fixed_cpu_seconds: float = 0.0
     precision: dict = field(default_factory=dict)
     instrument: dict = field(default_factory=dict)
     edge_loss: dict = field(default_factory=dict)
@@ -154,6 +157,7 @@ class DentalMetrics:
         out["stderr"] = self.stderr_json()
         out["cpu_seconds"] = self.cpu_seconds
         out["photons"] = self.photons
+        out["method"] = self.method
         if self.precision:
             out["precision"] = self.precision
         out["wavelength_nm"] = self.wavelengths_nm
@@ -241,7 +245,7 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
          estimator: str = "weighted", illuminant: str = "D65", observer: str = "2",
          op_backing: str = "black", reconstruction: str = "hold", threads: int | None = None,
          progress: bool | None = False, precision: float | None = None,
-         walks: str = "per-band") -> DentalMetrics:
+         walks: str = "per-band", solver: str = "monte-carlo") -> DentalMetrics:
     """Colour metrics of a layered specimen as ``instrument`` reads it (see module doc).
 
     ``specimen``: a list of (material, thickness [mm]) from top to bottom; a material is a
@@ -254,6 +258,9 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     :func:`photons_for_precision`) chooses them instead.
     ``walks``: 'per-band' (one walk per band) or 'shared' (every band of an instrument
     window from shared walks with a hero band per photon; :mod:`dentalux.reading.engine`).
+    ``solver``: 'monte-carlo' (the slab walks), 'layered' (the deterministic solver,
+    :mod:`dentalux.reading.layered`; ``photons`` then go to the walk that corrects for the
+    specimen's rim) or 'auto' (layered where it holds).
     """
     limits.check_reading_args(photons, seed, reconstruction, threads, bands, contact)
     if precision is not None:
@@ -261,7 +268,7 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
                   backing_white=backing_white, contact=contact, seed=seed,
                   estimator=estimator, illuminant=illuminant, observer=observer,
                   op_backing=op_backing, reconstruction=reconstruction, threads=threads,
-                  walks=walks)
+                  walks=walks, solver=solver)
         photons, plan = photons_for_precision(specimen, precision, **kw)
         m = read(specimen, photons=photons, progress=progress, **kw)
         m.precision = {**plan, "achieved": reading_precision(m)}
@@ -297,7 +304,7 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     cs = system(illuminant, str(observer))
     rec = Reconstruction(wl, grid=cs.wavelengths, basis=reconstruction)
     spectra = reading.measure(reading.stacks(parts, wl), wl, inst, rb_black, rb_white,
-                              photons, seed, estimator, threads, progress, walks)
+                              photons, seed, estimator, threads, progress, walks, solver)
     out, errs = spectra.propagate(lambda b: colour_of(b, cs, rec, op_backing))
     stderr = {k: float(errs[k]) for k in ("tp", "tp00", "cr", "op")}
     for key in ("lab_black", "lab_white", "lab_transmitted"):
@@ -338,6 +345,7 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
         seconds=spectra.extra["seconds"],
         cpu_seconds=spectra.cpu_seconds,
         method=spectra.method,
+        fixed_cpu_seconds=float(spectra.extra.get("solver_cpu_seconds", 0.0)),
         instrument=inst.to_json(),
         edge_loss=edge_loss,
         layers=[{"material": str(getattr(m, "name", "material")), "thickness_mm": t}
@@ -387,7 +395,8 @@ def photons_for_precision(specimen, precision, seed: int = 1, name: str = "preci
     p0 = reading_precision(pilot)
     need = int(np.ceil(PILOT_PHOTONS * PRECISION_MARGIN * (p0 / target) ** 2))
     need = max(need, PILOT_PHOTONS)
-    cpu = pilot.cpu_seconds * need / PILOT_PHOTONS
+    fixed = pilot.fixed_cpu_seconds
+    cpu = fixed + (pilot.cpu_seconds - fixed) * need / PILOT_PHOTONS
     plan = {"requested": target, "pilot_photons": PILOT_PHOTONS, "pilot_precision": p0,
             "photons_per_band": need, "estimated_cpu_seconds": cpu}
     if need > limits.MAX_SLAB_PHOTONS or cpu > limits.MAX_READING_CPU_SECONDS:
@@ -404,7 +413,7 @@ def metrics(material, thickness: float, bands=DEFAULT_BANDS, backing_black=None,
             estimator: str = "weighted", illuminant: str = "D65", observer: str = "2",
             op_backing: str = "black", reconstruction: str = "hold", threads: int | None = None,
             progress: bool | None = False, instrument=None,
-            precision: float | None = None) -> DentalMetrics:
+            precision: float | None = None, solver: str = "monte-carlo") -> DentalMetrics:
     """Colour metrics of a ``thickness`` [mm] disc of ``material`` (see module doc).
 
     ``material``: a Material (anything with ``.at(l)`` giving mua, mus, g, fd, n), a library
@@ -420,7 +429,7 @@ def metrics(material, thickness: float, bands=DEFAULT_BANDS, backing_black=None,
                 backing_black=backing_black, backing_white=backing_white, contact=contact,
                 photons=photons, seed=seed, estimator=estimator, illuminant=illuminant,
                 observer=observer, op_backing=op_backing, reconstruction=reconstruction,
-                threads=threads, progress=progress, precision=precision)
+                threads=threads, progress=progress, precision=precision, solver=solver)
 
 
 MATCH_BACKING = "white"  # shade tabs are matched to the reading over the white backing

@@ -52,6 +52,10 @@ pub const DIFFUSE_RUN_KEY: u64 = 100_000;
 /// Stream key offset of a specimen reading's separate transmitted run (the disc in air when
 /// the reading itself has an optical contact): `TRANSMITTED_RUN_KEY + k`.
 pub const TRANSMITTED_RUN_KEY: u64 = 200_000;
+/// Stream key offset of the run that corrects a laterally infinite reading for the
+/// specimen's rim ([`crate::integrators::slab::BackingOrders::past_rim_only`]): `RIM_RUN_KEY
+/// + k`, and `RIM_RUN_KEY + TRANSMITTED_RUN_KEY + k` for its transmitted run.
+pub const RIM_RUN_KEY: u64 = 300_000;
 
 /// A random stream (xoshiro256++), keyed by (seed, band, batch).
 #[derive(Debug, Clone)]

@@ -38,6 +38,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "TRANSMITTED_RUN_KEY",
         dentalux_core::rng::TRANSMITTED_RUN_KEY,
     )?;
+    m.add("RIM_RUN_KEY", dentalux_core::rng::RIM_RUN_KEY)?;
     m.add_function(wrap_pyfunction!(slab::slab_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(slab::slab_read_bands, m)?)?;
     m.add_function(wrap_pyfunction!(slab::slab_read_spectral, m)?)?;

@@ -133,7 +133,7 @@ fn stack_from(layers: Vec<LayerTuple>, prefix: &str) -> PyResult<Vec<SlabLayer>>
 #[pyfunction]
 #[pyo3(signature = (bands, band_keys, n_photons, seed, window, max_order, survival,
     n_above=1.0, n_below=1.0, incidence="normal", angle_deg=0.0, estimator="weighted",
-    threads=None, progress=None))]
+    threads=None, progress=None, past_rim_only=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn slab_read_bands<'py>(
     py: Python<'py>,
@@ -151,6 +151,7 @@ pub fn slab_read_bands<'py>(
     estimator: &str,
     threads: Option<usize>,
     progress: Option<PyObject>,
+    past_rim_only: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     if bands.len() != band_keys.len() || bands.is_empty() {
         return Err(PyValueError::new_err(
@@ -181,6 +182,7 @@ pub fn slab_read_bands<'py>(
             backing_orders: Some(BackingOrders {
                 max_order,
                 survival,
+                past_rim_only,
             }),
         });
     }
@@ -251,6 +253,7 @@ pub fn slab_read_spectral<'py>(
         orders: BackingOrders {
             max_order,
             survival,
+            past_rim_only: false,
         },
     };
     cfg.validate().map_err(runner::to_py_err)?;

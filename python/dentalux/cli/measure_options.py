@@ -29,6 +29,11 @@ Precision = Annotated[float, typer.Option(help="target standard error of the rea
                                                "units (over black and white); chooses the "
                                                "photons instead of --photons")]
 Seed = Annotated[int, typer.Option(help="random seed")]
+Solver = Annotated[str, typer.Option(help="monte-carlo (slab walks) | layered (deterministic "
+                                          "transport solver; --photons then go to the walk "
+                                          "that corrects for the specimen's rim; needs a "
+                                          "beam along the normal) | auto (layered where it "
+                                          "holds)")]
 Estimator = Annotated[str, typer.Option(help="weighted | analog")]
 Observer = Annotated[str, typer.Option(help="'2' (CIE 1931) or '10' (CIE 1964)")]
 Illuminant = Annotated[str, typer.Option(help="illuminant (colour-science name)")]

@@ -36,6 +36,7 @@ def report_command(
     backing_white: mo.BackingWhite = None,
     contact: mo.Contact = None,
     photons: mo.Photons = DEFAULTS["photons"],
+    solver: mo.Solver = DEFAULTS["solver"],
     seed: mo.Seed = DEFAULTS["seed"],
     estimator: mo.Estimator = DEFAULTS["estimator"],
     observer: mo.Observer = DEFAULTS["observer"],
@@ -66,7 +67,7 @@ def report_command(
         report.read_design(design)  # refuse a bad file before any photon is traced
         path = report.write_design(out, design, figure=figure, render=render,
                                    command=_command(), bands=mo.bands(bands),
-                                   photons=photons, seed=seed,
+                                   photons=photons, seed=seed, solver=solver,
                                    estimator=estimator, observer=observer,
                                    illuminant=illuminant, threads=threads)
         typer.echo(f"wrote {path}")
@@ -86,7 +87,8 @@ def report_command(
                         match=match, tp_thicknesses=ts, figure=figure, render=render,
                         command=_command(), bands=mo.bands(bands),
                         backing_black=backing_black, backing_white=backing_white,
-                        contact=contact, photons=photons, seed=seed, estimator=estimator,
+                        contact=contact, photons=photons, seed=seed, solver=solver,
+                        estimator=estimator,
                         observer=observer, illuminant=illuminant, threads=threads)
     typer.echo(f"wrote {path}")
 

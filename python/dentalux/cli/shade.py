@@ -38,6 +38,7 @@ def shade_command(
                                   "(see `dentalux design --help`)"),
     photons: mo.Photons = DEFAULTS["photons"],
     precision: mo.Precision = None,
+    solver: mo.Solver = DEFAULTS["solver"],
     seed: mo.Seed = DEFAULTS["seed"],
     estimator: mo.Estimator = DEFAULTS["estimator"],
     observer: mo.Observer = DEFAULTS["observer"],
@@ -74,7 +75,7 @@ def shade_command(
     kw = dict(bands=mo.bands(bands), backing_black=backing_black, backing_white=backing_white,
               contact=contact, photons=photons, seed=seed, estimator=estimator,
               observer=observer, illuminant=illuminant, threads=threads,
-              progress=False if as_json else None, precision=precision)
+              progress=False if as_json else None, precision=precision, solver=solver)
     out = dental.shade(material, thickness, against=against, instrument=inst, match=match,
                        specimen=specimen, **kw)
     check_finite(out, "shade")  # a NaN or inf reading is an error, never printed
@@ -117,7 +118,8 @@ def shade_command(
         table.add_row(f"{match} {row['tab']}", f"ΔE00 {row['delta_e00']:.2f}")
     if m.get("shade_match_instrument", {}).get("note"):
         table.add_row("  guide instrument", m["shade_match_instrument"]["note"])
-    photons_line = f"{m['photons']} photons, {m['cpu_seconds']:.1f} CPU-s"
+    how = ("layered solver, " if m["method"] == "layered" else "") + f"{m['photons']} photons"
+    photons_line = f"{how}, {m['cpu_seconds']:.1f} CPU-s"
     if "precision" in m:
         p = m["precision"]
         photons_line += (f"; precision asked {p['requested']:g}, reached {p['achieved']:.3f} "

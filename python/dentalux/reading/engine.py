@@ -45,6 +45,12 @@ SURVIVAL_RANGE = (0.5, 0.95)
 # 5.4x (the enamel/dentin stack, whose dentin g varies with the band) per photon; they read
 # a* and b* 1.3-2x cheaper for the same standard error, and L* 1.7-7x dearer.
 WALKS = ("per-band", "shared")
+#: how a reading is computed: 'monte-carlo' (the slab walks above), 'layered' (the
+#: deterministic solver of dentalux.reading.layered, with a Monte Carlo walk for what the
+#: specimen's rim takes), or 'auto' (layered where it holds, else monte-carlo)
+SOLVERS = ("monte-carlo", "layered", "auto")
+# bands solved together by the layered solver (its matrices: about 40 MB per band)
+LAYERED_CHUNK = 8
 
 
 def stacks(parts, wl) -> list[list[Layer]]:
@@ -65,14 +71,16 @@ def _tuples(band_stacks) -> list[list[tuple]]:
 
 
 def _ordered_runs(band_stacks, inst, photons, seed, key0, n_below, estimator, threads, cb,
-                  survival):
-    """The core's order sums (bands, replicates, orders + 1, keys) and photons per replicate."""
+                  survival, past_rim_only=False):
+    """The core's order sums (bands, replicates, orders + 1, keys) and photons per replicate
+    (``past_rim_only``: only what the specimen's rim takes, the layered solver's
+    correction)."""
     kind, deg = parse_incidence(inst.spec.incidence)
     raw = _core.slab_read_bands(
         _tuples(band_stacks), [key0 + k for k in range(len(band_stacks))], int(photons),
         int(seed), inst.window(0.0), MAX_ORDER, float(survival), n_above=1.0,
         n_below=float(n_below), incidence=kind, angle_deg=deg, estimator=estimator,
-        threads=threads, progress=cb)
+        threads=threads, progress=cb, past_rim_only=past_rim_only)
     return (np.asarray(raw["order_sums"]), np.asarray(raw["batch_photons"], dtype=float),
             np.asarray(raw["truncated"]))
 
@@ -104,6 +112,114 @@ def _polynomial(sums: np.ndarray, key: str, rb: np.ndarray) -> np.ndarray:
     return np.einsum("brk,bk->rb", sums[..., WINDOW_KEYS.index(key)], powers)
 
 
+def layered_refusal(inst) -> str | None:
+    """Why the layered solver cannot read through ``inst``, or None where it can: it needs a
+    beam along the normal (the detector cone, lit region and window are then symmetric
+    about it)."""
+    if inst.is_infinite or inst.spec.incidence == "normal":
+        return None
+    return (f"solver = 'layered': instrument {inst.name!r} ({inst.geometry}) lights at "
+            f"{inst.spec.incidence!r}; the layered solver needs a beam along the normal. "
+            "Use solver = 'monte-carlo' (or 'auto')")
+
+
+def _survival(rb_black, rb_white) -> float:
+    return float(np.clip(max(np.max(rb_white), np.max(rb_black)), *SURVIVAL_RANGE))
+
+
+# the layered solver's last order sums, by specimen and window: a reading sized by
+# --precision, the replicate seeds of a test, read the same specimen again
+_SOLVED: dict = {}
+_SOLVED_KEEP = 8
+
+
+def _solve_orders(band_stacks, inst, n_below: float, cb, done: int) -> np.ndarray:
+    """The layered solver's order sums (bands, orders + 1, keys) through ``inst``'s window
+    for a laterally infinite specimen, in chunks of bands of one set of indices."""
+    key = (tuple(tuple(lay.as_tuple(i) for i, lay in enumerate(stack))
+                 for stack in band_stacks), inst.window(0.0), float(n_below))
+    if key in _SOLVED:
+        if cb:
+            cb(done + len(band_stacks))
+        return _SOLVED[key]
+    out = _solve_orders_uncached(band_stacks, inst, n_below, cb, done)
+    if len(_SOLVED) >= _SOLVED_KEEP:
+        _SOLVED.pop(next(iter(_SOLVED)))
+    _SOLVED[key] = out
+    return out
+
+
+def _solve_orders_uncached(band_stacks, inst, n_below: float, cb, done: int) -> np.ndarray:
+    from dentalux.reading import layered
+
+    a0, a, b0, b, _, _, cone = inst.window(0.0)
+    out = np.zeros((len(band_stacks), MAX_ORDER + 1, len(WINDOW_KEYS)))
+    groups: dict[tuple, list[int]] = {}
+    for i, stack in enumerate(band_stacks):
+        groups.setdefault(tuple(lay.n for lay in stack), []).append(i)
+    for indices, members in groups.items():
+        first = float(_core.fresnel_reflectance([1.0], 1.0, indices[0])[0])
+        for lo in range(0, len(members), LAYERED_CHUNK):
+            idx = members[lo:lo + LAYERED_CHUNK]
+            group = [band_stacks[i] for i in idx]
+            res = layered.responses(group, 1.0, n_below, cone)
+            local = layered.local_parts(group, 1.0, n_below)
+            out[idx] = layered.order_sums(res, local, first, (a0, a), (b0, b), MAX_ORDER,
+                                          WINDOW_KEYS)
+            done += len(idx)
+            if cb:
+                cb(done)
+    return out
+
+
+def solved(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
+           estimator: str = "weighted", threads=None, progress=False,
+           contact: float | None = None) -> ReadSpectra:
+    """The instrument's readings from the layered solver (:mod:`dentalux.reading.layered`),
+    exact for a laterally infinite specimen, with a Monte Carlo walk of ``photons`` per band
+    for what a finite specimen's rim takes (past-rim tallies, the only noise)."""
+    why = layered_refusal(inst)
+    if why:
+        raise ValueError(why)
+    wl_count = len(band_stacks)
+    n_below = 1.0 if contact is None else float(contact)
+    runs = 1 if contact is None else 2
+    rim = np.isfinite(inst.window(0.0)[4])
+    start_cpu, start = time.process_time(), time.perf_counter()
+    total = wl_count * runs * (2 if rim else 1)
+    with bar(total, "bands", progress) as cb:
+        sums = _solve_orders(band_stacks, inst, n_below, cb, 0)
+        t_sums = sums if contact is None else _solve_orders(band_stacks, inst, 1.0, cb,
+                                                            wl_count)
+        solver_cpu = time.process_time() - start_cpu
+        if not rim:
+            n_rep = np.ones(1)
+            sums, t_sums = sums[:, None], t_sums[:, None]
+            mc_photons = 0
+        else:
+            limits.check_slab(photons, threads, seed=seed)
+            survival = _survival(rb_black, rb_white)
+            key = int(_core.RIM_RUN_KEY)
+            t_key = key + int(_core.TRANSMITTED_RUN_KEY)
+
+            corr, n_rep, _ = _ordered_runs(band_stacks, inst, photons, seed, key, n_below,
+                                           estimator, threads, None, survival, True)
+            sums = sums[:, None] * n_rep[None, :, None, None] - corr
+            if contact is None:
+                t_sums = sums
+            else:
+                t_corr = _ordered_runs(band_stacks, inst, photons, seed, t_key, 1.0,
+                                       estimator, threads, None, survival, True)[0]
+                t_sums = t_sums[:, None] * n_rep[None, :, None, None] - t_corr
+            mc_photons = int(photons) * wl_count * runs
+            if cb:
+                cb(total)
+    return _spectra(sums, t_sums, n_rep, inst, rb_black, rb_white, start_cpu, start,
+                    photons=mc_photons, method="layered",
+                    extra={"runs": runs, "rim_correction": bool(rim),
+                           "solver_cpu_seconds": solver_cpu})
+
+
 def windowed(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
              estimator: str = "weighted", threads=None, progress=False,
              contact: float | None = None, walks: str = "per-band") -> ReadSpectra:
@@ -113,7 +229,7 @@ def windowed(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
     wl_count = len(band_stacks)
     limits.check_slab(photons, threads, seed=seed)
     n_below = 1.0 if contact is None else float(contact)
-    survival = float(np.clip(max(np.max(rb_white), np.max(rb_black)), *SURVIVAL_RANGE))
+    survival = _survival(rb_black, rb_white)
     runs = 1 if contact is None else 2
     start_cpu, start = time.process_time(), time.perf_counter()
     if walks not in WALKS:
@@ -140,6 +256,18 @@ def windowed(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
                                        estimator, threads, second, survival)[0]
         if contact is None:
             t_sums = sums
+    return _spectra(sums, t_sums, n_rep, inst, rb_black, rb_white, start_cpu, start,
+                    photons=int(photons) * wl_count * runs,
+                    method="shared-walks" if shared else "backing-orders",
+                    extra={"runs": runs, "truncated_max": float(np.max(truncated)),
+                           "survival": survival, **extra})
+
+
+def _spectra(sums, t_sums, n_rep, inst, rb_black, rb_white, start_cpu, start, photons,
+             method, extra) -> ReadSpectra:
+    """The readings over black, over white and in transmission from order sums (bands,
+    replicates, orders + 1, keys) and the photons of each replicate."""
+    wl_count = sums.shape[0]
     spec = inst.spec
     read_key = "viewed_cone_reflectance" if spec.cone_deg else "viewed_reflectance"
     f = inst.white_fraction()
@@ -165,12 +293,9 @@ def windowed(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
     edge = np.tensordot(weights, loss / n_rep[:, None, None], axes=([0], [0]))
     return ReadSpectra(
         wavelengths_nm=np.zeros(0), values=values, stderr=np.sqrt(var), edge_loss=edge,
-        photons=int(photons) * wl_count * runs,
-        cpu_seconds=time.process_time() - start_cpu,
-        method="shared-walks" if shared else "backing-orders",
+        photons=photons, cpu_seconds=time.process_time() - start_cpu, method=method,
         replicates=reps, replicate_weights=weights,
-        extra={"seconds": time.perf_counter() - start, "runs": runs,
-               "truncated_max": float(np.max(truncated)), "survival": survival, **extra})
+        extra={"seconds": time.perf_counter() - start, **extra})
 
 
 # the adding formula's per-band inputs, in the order of ReadSpectra.inputs (the fifth input
@@ -233,16 +358,71 @@ def infinite(band_stacks, rb_black, rb_white, photons: int, seed: int,
     return out
 
 
+def infinite_solved(band_stacks, rb_black, rb_white, contact: float | None = None
+                    ) -> ReadSpectra:
+    """The ``infinite`` geometry's readings by the adding formula, its R1, T1, R2, T2 from
+    the layered solver at spatial frequency 0 (no noise)."""
+    from dentalux.reading import layered
+
+    start_cpu, start = time.process_time(), time.perf_counter()
+    n_below = 1.0 if contact is None else float(contact)
+    vals = np.zeros((5, len(band_stacks)))
+    groups: dict[tuple, list[int]] = {}
+    for i, stack in enumerate(band_stacks):
+        groups.setdefault(tuple(lay.n for lay in stack), []).append(i)
+    for members in groups.values():
+        group = [band_stacks[i] for i in members]
+        res = layered.responses(group, 1.0, n_below, None, ks=(0.0,))
+        vals[:4, members] = [res.r_all[:, 0], res.into_backing[:, 0], res.q[:, 0],
+                             res.e_all[:, 0]]
+        air = res if contact is None else layered.responses(group, 1.0, 1.0, None, ks=(0.0,))
+        vals[4, members] = air.into_backing[:, 0]
+
+    def combine(batch):  # (..., 5, bands) -> (..., 3, bands)
+        r1, t1, r2, t2, tt = (batch[..., i, :] for i in range(5))
+        return np.stack([over_backing(r1, t1, r2, t2, rb_black),
+                         over_backing(r1, t1, r2, t2, rb_white), tt], axis=-2)
+
+    values = combine(vals)
+    return ReadSpectra(
+        wavelengths_nm=np.zeros(0), values=values, stderr=np.zeros_like(values),
+        edge_loss=np.zeros((2, len(band_stacks))), photons=0,
+        cpu_seconds=time.process_time() - start_cpu, method="layered", inputs=vals,
+        inputs_stderr=np.zeros_like(vals), combine=combine,
+        extra={"seconds": time.perf_counter() - start,
+               **{k: vals[i] for i, k in enumerate(ADDING_INPUTS)}})
+
+
+def use_layered(inst, solver: str) -> bool:
+    """Whether ``solver`` ('monte-carlo', 'layered', 'auto') reads through ``inst`` with the
+    layered solver; 'layered' where it does not hold is refused (ValueError)."""
+    if solver not in SOLVERS:
+        raise ValueError(f"solver = {solver!r}: allowed {', '.join(SOLVERS)}")
+    if solver == "monte-carlo":
+        return False
+    why = layered_refusal(inst)
+    if why and solver == "layered":
+        raise ValueError(why)
+    return why is None
+
+
 def measure(band_stacks, wl, inst, rb_black, rb_white, photons: int, seed: int,
             estimator: str = "weighted", threads=None, progress=False,
-            walks: str = "per-band") -> ReadSpectra:
+            walks: str = "per-band", solver: str = "monte-carlo") -> ReadSpectra:
     """The readings of one stack per band (``band_stacks``, top layer first) at the bands
     ``wl`` [nm] through ``inst`` with backing reflectances ``rb_black``, ``rb_white`` per
-    band (module doc). ``walks``: 'per-band' or 'shared' (instrument windows only)."""
+    band (module doc). ``walks``: 'per-band' or 'shared' (instrument windows only);
+    ``solver``: one of SOLVERS (the layered solver ignores ``walks``)."""
     if walks not in WALKS:
         raise ValueError(f"walks = {walks!r}: allowed {', '.join(WALKS)}")
     contact = inst.contact_index
-    if inst.is_infinite:
+    if use_layered(inst, solver):
+        if inst.is_infinite:
+            out = infinite_solved(band_stacks, rb_black, rb_white, contact)
+        else:
+            out = solved(band_stacks, inst, rb_black, rb_white, photons, seed, estimator,
+                         threads, progress, contact)
+    elif inst.is_infinite:
         out = infinite(band_stacks, rb_black, rb_white, photons, seed, estimator, threads,
                        progress, contact)
     else:

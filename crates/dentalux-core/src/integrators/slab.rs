@@ -162,6 +162,12 @@ pub struct BackingOrders {
     pub max_order: usize,
     /// Probability of continuing after a backing reflection, in (0, 1].
     pub survival: f64,
+    /// Tally only what the specimen's rim takes from the window: the walk goes on past the
+    /// rim as in a laterally infinite specimen, and a window exit counts only once the walk
+    /// has crossed the rim. The run then estimates (infinite specimen − finite specimen),
+    /// the correction that a laterally infinite solution needs
+    /// (python/dentalux/reading/layered.py); it is small, so it takes few photons.
+    pub past_rim_only: bool,
 }
 
 impl BackingOrders {
@@ -342,6 +348,8 @@ struct Tally {
     /// been from it (see [`Tracer::window_fraction`]).
     entry: (f64, f64),
     excursion2: f64,
+    /// Whether the photon has crossed the specimen's rim ([`BackingOrders::past_rim_only`]).
+    past_rim: bool,
 }
 
 impl Tally {
@@ -361,6 +369,7 @@ impl Tally {
             order: 0,
             entry: (0.0, 0.0),
             excursion2: 0.0,
+            past_rim: false,
         }
     }
     fn merge(&mut self, o: &Tally) {
@@ -575,6 +584,8 @@ struct Tracer<'a> {
     inv_cone_fraction: f64,
     /// Backing-order tallies (the window's backing then unused).
     orders: Option<BackingOrders>,
+    /// [`BackingOrders::past_rim_only`].
+    past_rim_only: bool,
 }
 
 impl<'a> Tracer<'a> {
@@ -611,6 +622,7 @@ impl<'a> Tracer<'a> {
             backing: win.map_or(0.0, |w| w.backing),
             inv_cone_fraction: win.map_or(1.0, |w| 1.0 / w.cone_fraction()),
             orders: cfg.backing_orders,
+            past_rim_only: cfg.backing_orders.is_some_and(|o| o.past_rim_only),
         }
     }
 
@@ -660,6 +672,9 @@ impl<'a> Tracer<'a> {
     /// Add `w` to window tally `key`, and to its slot of the photon's backing order.
     #[inline]
     fn window_add(&self, key: usize, w: f64, ph: &mut Photon, t: &mut Tally) {
+        if self.past_rim_only && !t.past_rim {
+            return;
+        }
         ph[N_SCALARS + key] += w;
         if !t.orders.is_empty() {
             t.orders[t.order * N_WINDOW + key] += w;
@@ -761,10 +776,19 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// Whether a photon at `pos` has left the specimen through its rim.
+    /// Whether the walk at `pos` ends at the specimen's rim: beyond it, its power `w` is
+    /// tallied as lost there; with [`BackingOrders::past_rim_only`] it goes on, marked.
     #[inline]
-    fn beyond_rim(&self, pos: Vec3) -> bool {
-        pos.x * pos.x + pos.y * pos.y > self.rim2
+    fn ends_at_rim(&self, pos: Vec3, w: f64, ph: &mut Photon, t: &mut Tally) -> bool {
+        if pos.x * pos.x + pos.y * pos.y <= self.rim2 {
+            return false;
+        }
+        if self.past_rim_only {
+            t.past_rim = true;
+            return false;
+        }
+        self.window_add(instrument::RIM, w, ph, t);
+        true
     }
 
     /// Trace one photon; its contributions go to `ph` (scalars) and `t` (profiles).
@@ -780,6 +804,7 @@ impl<'a> Tracer<'a> {
         let n_layers = self.layers.len() as isize;
         t.order = 0;
         t.excursion2 = 0.0;
+        t.past_rim = false;
         // launch direction in the medium above
         let d_above = match cfg.incidence {
             Incidence::Normal => Vec3::Z,
@@ -828,8 +853,7 @@ impl<'a> Tracer<'a> {
                 // interaction inside layer li (eqs. 2–4)
                 pos += d * s;
                 self.track_excursion(pos, t);
-                if self.beyond_rim(pos) {
-                    self.window_add(instrument::RIM, w, ph, t);
+                if self.ends_at_rim(pos, w, ph, t) {
                     return Ok(());
                 }
                 if roulette {
@@ -867,8 +891,7 @@ impl<'a> Tracer<'a> {
             pos += d * db;
             pos.z = if down { lc.z_bot } else { lc.z_top };
             self.track_excursion(pos, t);
-            if self.beyond_rim(pos) {
-                self.window_add(instrument::RIM, w, ph, t);
+            if self.ends_at_rim(pos, w, ph, t) {
                 return Ok(());
             }
             let next = if down { layer + 1 } else { layer - 1 };

@@ -135,6 +135,11 @@ impl SpectralConfig {
             ));
         }
         self.window.validate()?;
+        if self.orders.past_rim_only {
+            return Err(Error::InvalidInput(
+                "backing past_rim_only: the rim correction is read by per-band walks".into(),
+            ));
+        }
         self.orders.validate()
     }
 }
@@ -599,6 +604,7 @@ mod tests {
             orders: BackingOrders {
                 max_order: 16,
                 survival: 0.9,
+                past_rim_only: false,
             },
         }
     }

@@ -363,6 +363,7 @@ fn backing_orders_reproduce_separate_backing_runs() {
     let orders = BackingOrders {
         max_order: 64,
         survival: 0.9,
+        past_rim_only: false,
     };
     let poly = run(&two_layer_windowed(0.0, Some(orders), 11));
     assert!(poly.truncated < 1e-6, "truncated {}", poly.truncated);
@@ -399,6 +400,7 @@ fn ring_windows_with_backing_orders_reproduce_brute_force_runs() {
     let orders = BackingOrders {
         max_order: 64,
         survival: 0.9,
+        past_rim_only: false,
     };
     for (a0, a, b0, b) in [(1.0, 1.5, 0.0, 0.6), (0.0, 0.6, 1.0, 1.5)] {
         let ring = |cfg: &mut SlabConfig| {
@@ -446,6 +448,7 @@ fn backing_orders_are_refused_without_a_window_or_out_of_range() {
     cfg.backing_orders = Some(BackingOrders {
         max_order: 8,
         survival: 0.9,
+        past_rim_only: false,
     });
     assert!(cfg.validate().unwrap_err().to_string().contains("window"));
     for (max_order, survival, field) in [
@@ -459,10 +462,52 @@ fn backing_orders_are_refused_without_a_window_or_out_of_range() {
             Some(BackingOrders {
                 max_order,
                 survival,
+                past_rim_only: false,
             }),
             1,
         );
         cfg.n_photons = 100;
         assert!(cfg.validate().unwrap_err().to_string().contains(field));
     }
+}
+
+#[test]
+fn past_rim_tally_is_the_difference_between_infinite_and_finite_specimens() {
+    // a narrow specimen (rim 2 mm around a 1.5 mm window) loses much of a white backing's
+    // light at its rim; the past-rim walk estimates what the rim takes, so that infinite −
+    // past-rim reproduces the finite specimen (independent seeds, 4 s.e.)
+    let orders = |past_rim_only| BackingOrders {
+        max_order: 64,
+        survival: 0.9,
+        past_rim_only,
+    };
+    let with_rim = |past, seed| {
+        let mut cfg = two_layer_windowed(0.0, Some(orders(past)), seed);
+        cfg.window.as_mut().unwrap().specimen_radius = 2.0;
+        cfg
+    };
+    let infinite = run(&two_layer_windowed(0.0, Some(orders(false)), 31));
+    let finite = run(&with_rim(false, 32));
+    let past = run(&with_rim(true, 33));
+    for rb in [0.0, 0.9] {
+        for key in [instrument::VIEWED_R, instrument::VIEWED_T] {
+            let (vi, si) = polynomial(&infinite, 65, key, rb);
+            let (vf, sf) = polynomial(&finite, 65, key, rb);
+            let (vp, sp) = polynomial(&past, 65, key, rb);
+            if rb > 0.0 && key == instrument::VIEWED_R {
+                assert!(
+                    vi - vf > 4.0 * si.hypot(sf),
+                    "rim effect too small: {vi} {vf}"
+                );
+            }
+            let z = (vi - vp - vf) / si.hypot(sf).hypot(sp);
+            assert!(
+                z.abs() < 4.0,
+                "rb {rb} key {key}: {vi} − {vp} against {vf} (z {z})"
+            );
+        }
+    }
+    // the past-rim walk tallies nothing for a specimen without a rim
+    let none = run(&two_layer_windowed(0.0, Some(orders(true)), 34));
+    assert!(none.order_sums.iter().all(|&v| v == 0.0));
 }

@@ -1,0 +1,158 @@
+"""Reflection and transmission operators of a layer and of an interface, at one spatial
+frequency k, for radiance vectors over (azimuthal mode, direction node), mode-major.
+
+A lateral modulation exp(i k x) adds i k sin(theta) cos(phi) to the extinction. Azimuth is
+expanded in cos(m phi) about the direction of k; the lateral term couples m to m +- 1, and
+with the modes scaled by i^m it is real, so every operator is real. The phase function
+enters by its Legendre moments, truncated by delta-M (Wiscombe 1977): the moments beyond
+``order`` are put into a forward peak that leaves the light's direction unchanged.
+
+A homogeneous layer is solved from the eigenvectors of its generator. With L+ and L- the
+down- and up-going radiance, A the extinction, lateral term and in-scattering within a
+hemisphere (per unit mu) and B the scattering between hemispheres,
+S = L+ + L- and D = L+ - L- obey S'' = (A + B)(A - B) S; its modes exp(-kappa z) and
+exp(kappa (z - d)) (Re kappa >= 0, so nothing overflows) meet L+(0) = x and L-(d) = 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from scipy.special import gammaln, lpmv
+
+from dentalux import _core
+from dentalux.reading.layered.quadrature import Nodes
+
+
+def legendre_moments(g: float, fd: float, lobes, count: int) -> np.ndarray:
+    """Legendre moments chi_0..chi_count of the phase function: Henyey-Greenstein's are
+    g^l, so HG(g) mixed with an isotropic fraction fd (eq. 10) has (1 - fd) g^l (l > 0) and a
+    sum of lobes (eq. 8) the weighted sum."""
+    ls = np.arange(count + 1)
+    if lobes:
+        chi = sum(w * float(gl) ** ls for w, gl in lobes)
+    else:
+        chi = (1 - fd) * float(g) ** ls
+    chi = np.array(chi, dtype=float)
+    chi[0] = 1.0
+    return chi
+
+
+@lru_cache(maxsize=64)
+def _associated(mu_key: tuple, modes: int, order: int) -> np.ndarray:
+    """sqrt((l-m)!/(l+m)!) P_l^m(x) at x = (mu, -mu): (modes, order, 2N)."""
+    mu = np.asarray(mu_key)
+    x = np.concatenate([mu, -mu])
+    out = np.zeros((modes, order, len(x)))
+    for m in range(modes):
+        for ell in range(m, order):
+            norm = np.exp(0.5 * (gammaln(ell - m + 1) - gammaln(ell + m + 1)))
+            out[m, ell] = lpmv(m, ell, x) * norm
+    return out
+
+
+def kernels(chi_star: np.ndarray, mu: np.ndarray, w: np.ndarray, modes: int) -> np.ndarray:
+    """Scattering kernels per band and mode, (bands, modes, 2N, 2N) over directions (down
+    nodes, then up nodes): entry [i, j] is the radiance scattered into direction i per unit
+    radiance in direction j and unit scattering, quadrature weight of j included. The
+    addition theorem gives mode m: sum_l (2l + 1)/2 chi*_l (l-m)!/(l+m)! P_l^m P_l^m."""
+    order = chi_star.shape[1]
+    p = _associated(tuple(np.round(mu, 15)), modes, order)
+    ww = np.concatenate([w, w])
+    coef = (2 * np.arange(order) + 1) / 2 * chi_star
+    k = np.einsum("bl,mli,mlj->bmij", coef, p, p) * ww
+    # every direction's scattered light integrates to one (the quadrature's mode-0 error)
+    k[:, 0] /= (ww[:, None] * k[:, 0]).sum(axis=1, keepdims=True) / ww
+    return k
+
+
+def coupling(modes: int) -> np.ndarray:
+    """The lateral term's mode coupling in the modes scaled by i^m: cos(phi) cos(m phi) =
+    (cos((m - 1) phi) + cos((m + 1) phi)) / 2, the part into m - 1 with sign -1."""
+    c = np.zeros((modes, modes))
+    for m in range(modes):
+        if m + 1 < modes:
+            c[m + 1, m] = 1.0 if m == 0 else 0.5
+        if m >= 1:
+            c[m - 1, m] = -0.5
+    return c
+
+
+def layer(optics, thickness: float, n: float, nodes: Nodes, ks, modes: int
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """Reflection and transmission of a homogeneous layer (the same from above and below)
+    for every band of ``optics`` = (mua, mus, chi) and every k in ``ks``:
+    (bands, len(ks), M, M) each, M = modes x nodes in the layer."""
+    mua, mus, chi = optics
+    order = chi.shape[1] - 1
+    mu, w = nodes.mu(n), nodes.weights(n)
+    nn = len(mu)
+    f = chi[:, order]
+    kern = kernels((chi[:, :order] - f[:, None]) / (1 - f[:, None]), mu, w, modes)
+    mus_s = mus * (1 - f)
+    mut = mua + mus_s
+    size = modes * nn
+    bands = len(mua)
+    within = np.zeros((bands, size, size))
+    between = np.zeros((bands, size, size))
+    for m in range(modes):
+        blk = slice(m * nn, (m + 1) * nn)
+        within[:, blk, blk] = (mut[:, None, None] * np.eye(nn)
+                               - mus_s[:, None, None] * kern[:, m, :nn, :nn]) / mu[:, None]
+        between[:, blk, blk] = mus_s[:, None, None] * kern[:, m, :nn, nn:] / mu[:, None]
+    lateral = np.kron(coupling(modes), np.diag(nodes.s[:nn] / n / mu))
+    a = within[:, None] + np.asarray(ks, float)[None, :, None, None] * lateral
+    b = between[:, None]
+    apb = a + b
+    lam, v = np.linalg.eig(apb @ (a - b))
+    kappa = np.sqrt(lam.astype(complex))
+    kappa = np.where(kappa.real < 0, -kappa, kappa)
+    p = v + np.linalg.solve(apb.astype(complex), v * kappa[..., None, :])
+    q = 2 * v - p
+    pinv = np.linalg.inv(p)
+    x = pinv @ q
+    e = np.exp(-kappa * thickness)[..., None, :]  # right-multiplying by diag(E)
+    xe = x * e
+    eye = np.eye(size)
+    inner = np.linalg.inv(eye - xe @ xe) @ pinv
+    r = p @ (x - np.swapaxes(e, -1, -2) * xe) @ inner
+    t = p @ (eye * e - x @ xe) @ inner
+    return r.real, t.real
+
+
+@dataclass
+class Element:
+    """A piece of the stack for radiance vectors: reflection from above ``rd``, transmission
+    downwards ``td``, reflection from below ``ru``, transmission upwards ``tu``."""
+
+    rd: np.ndarray
+    td: np.ndarray
+    ru: np.ndarray
+    tu: np.ndarray
+
+
+def interface(n1: float, n2: float, nodes: Nodes, modes: int) -> Element:
+    """The plane Fresnel interface from index n1 (above) to n2 (below), node to node and
+    mode by mode; a node that one side lacks is totally reflected on the other."""
+    c1, c2 = nodes.count(n1), nodes.count(n2)
+    common = min(c1, c2)
+    r1, r2 = np.ones(c1), np.ones(c2)
+    r1[:common] = _core.fresnel_reflectance(nodes.mu(n1)[:common].tolist(), n1, n2)
+    r2[:common] = _core.fresnel_reflectance(nodes.mu(n2)[:common].tolist(), n2, n1)
+    td, tu = np.zeros((c2, c1)), np.zeros((c1, c2))
+    i = np.arange(common)
+    td[i, i] = (1 - r1[:common]) * (n2 / n1) ** 2
+    tu[i, i] = (1 - r2[:common]) * (n1 / n2) ** 2
+    eye = np.eye(modes)
+    return Element(*(np.kron(eye, x) for x in (np.diag(r1), td, np.diag(r2), tu)))
+
+
+def add(a: Element, b: Element) -> Element:
+    """``a`` above ``b``, with every order of reflection between them."""
+    eye = np.eye(a.ru.shape[-1])
+    x1 = np.linalg.inv(eye - a.ru @ b.rd)
+    x2 = np.linalg.inv(eye - b.rd @ a.ru)
+    return Element(rd=a.rd + a.tu @ b.rd @ x1 @ a.td, td=b.td @ x1 @ a.td,
+                   ru=b.ru + b.td @ a.ru @ x2 @ b.tu, tu=a.tu @ x2 @ b.tu)

@@ -1,0 +1,134 @@
+"""The response of a plane stack (layers between the medium above and the medium below) at
+each spatial frequency: what the instrument's readings need, per band."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dentalux.reading.layered import operators as ops
+from dentalux.reading.layered import single
+from dentalux.reading.layered.quadrature import cone_weights, make_nodes
+
+#: quadrature nodes between consecutive refractive indices (the first interval adds one at
+#: normal incidence)
+NODES_PER_INTERVAL = 8
+#: Legendre moments kept before the delta-M truncation. With the single-scattering
+#: correction (single.py) 16 moments read the detector cone within 0.1 % at k = 0; more
+#: moments than the nodes resolve (about 2 per node and interval) make the kernels ring
+#: (measured: docs/notes/2026-12-07-layered-solver.md)
+ORDER = 16
+#: spatial frequencies solved [1/mm]; between them the response is interpolated (window.py)
+K_NODES = (0.0, 0.1, 0.25, 0.5, 0.8, 1.2, 1.8, 2.7, 4.0, 6.0, 9.0, 14.0, 21.0, 32.0)
+#: azimuthal modes by spatial frequency: (k up to [1/mm], modes). The lateral term couples
+#: the modes in proportion to k / mu_t; where k is large the response is small and needs
+#: fewer of them again
+MODES_BY_K = ((0.0, 1), (0.3, 3), (1.5, 4), (12.0, 6), (np.inf, 4))
+
+#: whether the radiance in a detector cone gets the single-scattering correction (single.py)
+SINGLE_SCATTER = True
+
+#: the solver's accuracy, relative to a reading: its discretisation against a converged
+#: solution (more nodes, modes and spatial frequencies) was at most 0.16 % on discs and
+#: 0.4 % on a fibre probe's ring, and it agreed with 2 M-photon slab walks within their
+#: noise (0.1-0.3 %) on 16 cases (docs/notes/2026-12-07-layered-solver.md)
+ACCURACY = 0.005
+
+FIELDS = ("r_cone", "r_all", "into_backing", "q", "e_cone", "e_all")
+
+
+@dataclass
+class Response:
+    """Per band and spatial frequency (bands, k): the beam's reflectance into the detector
+    cone (over the cone's Lambertian fraction; the hemisphere without a cone) and over the
+    hemisphere, its flux into the medium below, and a unit Lambertian exitance from below
+    (the backing's light): returned to it (q) and leaving into the cone (e_cone, likewise)
+    and the hemisphere (e_all)."""
+
+    k: np.ndarray
+    r_cone: np.ndarray
+    r_all: np.ndarray
+    into_backing: np.ndarray
+    q: np.ndarray
+    e_cone: np.ndarray
+    e_all: np.ndarray
+
+
+def _optics(band_stacks, index: int, order: int):
+    layers = [stack[index] for stack in band_stacks]
+    mua = np.array([lay.mua for lay in layers], float)
+    mus = np.array([lay.mus for lay in layers], float)
+    chi = np.stack([ops.legendre_moments(lay.g, lay.fd, lay.lobes, order) for lay in layers])
+    return mua, mus, chi
+
+
+def response(band_stacks, ks, n_above: float, n_below: float, cone_deg, modes: int,
+             per_interval: int = NODES_PER_INTERVAL, order: int = ORDER) -> Response:
+    """Solve one stack per band (slab ``Layer`` lists, top first, with the same indices and
+    thicknesses in every band) at the spatial frequencies ``ks``, with ``modes`` modes."""
+    first = band_stacks[0]
+    nodes = make_nodes([n_above] + [lay.n for lay in first] + [n_below], per_interval)
+    total = ops.interface(n_above, first[0].n, nodes, modes)
+    for i, lay in enumerate(first):
+        r, t = ops.layer(_optics(band_stacks, i, order), lay.thickness, lay.n, nodes, ks,
+                         modes)
+        total = ops.add(total, ops.Element(r, t, r, t))
+        n_next = first[i + 1].n if i + 1 < len(first) else n_below
+        total = ops.add(total, ops.interface(lay.n, n_next, nodes, modes))
+    top, bot = nodes.count(n_above), nodes.count(n_below)
+    flux_top = 2 * np.pi * nodes.weights(n_above) * nodes.mu(n_above)
+    flux_bot = 2 * np.pi * nodes.weights(n_below) * nodes.mu(n_below)
+    if cone_deg is None:
+        cone = flux_top
+    else:
+        lo, hi = np.radians(cone_deg)
+        cone = cone_weights(nodes.mu(n_above), np.cos(hi), np.cos(lo))
+        cone = cone / (np.sin(hi) ** 2 - np.sin(lo) ** 2)
+    up = total.rd[..., :top, 0] / flux_top[0]         # unit irradiance in the normal node
+    down = total.td[..., :bot, 0] / flux_top[0]
+    back = total.ru[..., :bot, :bot].sum(-1) / np.pi  # unit Lambertian exitance below
+    leave = total.tu[..., :top, :bot].sum(-1) / np.pi
+    return Response(k=np.asarray(ks, float), r_cone=up @ cone, r_all=up @ flux_top,
+                    into_backing=down @ flux_bot, q=back @ flux_bot, e_cone=leave @ cone,
+                    e_all=leave @ flux_top)
+
+
+def modes_for(k: float) -> int:
+    """Azimuthal modes solved at spatial frequency k (MODES_BY_K)."""
+    return next(m for k_max, m in MODES_BY_K if k <= k_max)
+
+
+def responses(band_stacks, n_above: float, n_below: float, cone_deg, ks=K_NODES,
+              **settings) -> Response:
+    """:func:`response` at every spatial frequency of ``ks``, each with the modes it needs,
+    solved in groups of equal modes."""
+    ks = np.asarray(ks, float)
+    groups: dict[int, list[int]] = {}
+    for i, k in enumerate(ks):
+        groups.setdefault(modes_for(k), []).append(i)
+    out = {f: np.zeros((len(band_stacks), len(ks))) for f in FIELDS}
+    for modes, idx in groups.items():
+        res = response(band_stacks, ks[idx], n_above, n_below, cone_deg, modes, **settings)
+        for f in FIELDS:
+            out[f][:, idx] = getattr(res, f)
+    if cone_deg is not None and SINGLE_SCATTER:
+        out["r_cone"] += single.correction(band_stacks, ks, n_above, cone_deg,
+                                           settings.get("order", ORDER))
+    return Response(k=ks, **out)
+
+
+def local_parts(band_stacks, n_above: float, n_below: float, order: int = ORDER
+                ) -> Response:
+    """The parts of the beam's response that stay where it enters (constant in k): its
+    specular reflections at the interfaces and its transmission without scattering (outside
+    the delta-M peak), from the stack with its scattering turned into extinction."""
+    clear = []
+    for stack in band_stacks:
+        row = []
+        for lay in stack:
+            f = ops.legendre_moments(lay.g, lay.fd, lay.lobes, order)[order]
+            row.append(type(lay)(mua=lay.mua + lay.mus * (1 - f), mus=0.0, g=0.0, n=lay.n,
+                                 thickness=lay.thickness))
+        clear.append(row)
+    return response(clear, [0.0], n_above, n_below, None, 1, order=order)

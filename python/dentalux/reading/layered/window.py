@@ -1,0 +1,107 @@
+"""From the stack's response per spatial frequency to what an instrument's window reads.
+
+For a lit region of unit power S and a window W on a laterally infinite specimen, the power
+read is the overlap integral of S, W and the specimen's point response; by Parseval it is
+(1/2 pi) int k dk S(k) W(k) F(k) with S, W the Hankel transforms of the (concentric) lit and
+viewed discs or rings and F the response at spatial frequency k. F is smooth and solved at a
+few k (stack.K_NODES); the kernel S W oscillates and is integrated on a fine grid.
+
+The Lambertian backing is local (zero gap), so it multiplies at each k: the reading over a
+backing R_b is V_0 + sum_{j >= 1} V_j R_b^j with V_0 the bare stack and V_j the integral of
+E e q^(j-1) (E: the beam's flux into the backing, q: the backing's light returned to it,
+e: the backing's light leaving in the window), the order sums that the slab walk tallies.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.special import j1
+
+from dentalux.reading.layered.stack import Response
+
+# the k integral: the kernel oscillates with period 2 pi / (largest radius) and falls as
+# k^-2; it is summed on a grid of FINE_PER_PERIOD points per period. Past the last solved k a
+# response keeps its local part (specular reflections and the unscattered beam, constant in
+# k) and its remainder falls as 1/k, taken to TAIL_FACTOR times the last node; the kernel's
+# whole integral is the exact overlap
+FINE_PER_PERIOD = 64
+TAIL_FACTOR = 8.0
+# the responses are splined in asinh(k / K_SCALE), which resolves their fall near k = 0
+K_SCALE = 0.05
+
+
+def disc_kernel(k, lit: tuple[float, float], view: tuple[float, float]) -> np.ndarray:
+    """(1/2 pi) k S(k) W(k) for the lit ring ``lit`` = (inner, outer radius [mm]) at unit
+    power and the window ring ``view``."""
+    k = np.asarray(k, float)
+
+    def disc(r):  # the Hankel transform of a disc of radius r: 2 pi r J1(k r) / k
+        return 2 * np.pi * r * j1(k * r) / k if r > 0 else np.zeros_like(k)
+
+    s = (disc(lit[1]) - disc(lit[0])) / (np.pi * (lit[1] ** 2 - lit[0] ** 2))
+    return k * s * (disc(view[1]) - disc(view[0])) / (2 * np.pi)
+
+
+def overlap(lit, view) -> float:
+    """Fraction of the lit ring's power falling inside the window ring (concentric)."""
+    lo, hi = max(lit[0], view[0]), min(lit[1], view[1])
+    return 0.0 if hi <= lo else (hi**2 - lo**2) / (lit[1] ** 2 - lit[0] ** 2)
+
+
+@lru_cache(maxsize=32)
+def _weights(ks: tuple, lit: tuple, view: tuple) -> tuple[np.ndarray, np.ndarray, float]:
+    """Linear weights of the window's reading: (spline part per node, 1/k tail of the last
+    node's remainder, the overlap that the local part is read with)."""
+    k_last = ks[-1]
+    step = 2 * np.pi / max(lit[1], view[1]) / FINE_PER_PERIOD
+    fine = np.arange(step / 2, k_last, step)
+    far = np.arange(k_last + step / 2, TAIL_FACTOR * k_last, step)
+    basis = CubicSpline(np.arcsinh(np.asarray(ks) / K_SCALE), np.eye(len(ks)))(
+        np.arcsinh(fine / K_SCALE))                                 # (fine, nodes)
+    spline = (disc_kernel(fine, lit, view) * step) @ basis
+    tail = float((k_last / far) @ (disc_kernel(far, lit, view) * step))
+    return spline, tail, overlap(lit, view)
+
+
+def integrate(ks, values: np.ndarray, lit, view, local=0.0) -> np.ndarray:
+    """The window's reading of responses ``values`` (..., len(ks)) whose part ``local``
+    (...) is constant in k (module doc)."""
+    spline, tail, over = _weights(tuple(map(float, ks)), tuple(map(float, lit)),
+                                  tuple(map(float, view)))
+    local = np.asarray(local, float)
+    rest = values - local[..., None]
+    return rest @ spline + rest[..., -1] * tail + local * over
+
+
+def order_sums(res: Response, local: Response, first_surface: float, lit, view,
+               max_order: int, keys: tuple[str, ...]) -> np.ndarray:
+    """The window tallies by backing order that the slab walk estimates, (bands, max_order
+    + 1, keys) per unit incident power, from the stack's response ``res``, its local parts
+    and its first-surface (specular) reflectance; no rim (its key is 0)."""
+    bands = res.r_all.shape[0]
+    out = np.zeros((bands, max_order + 1, len(keys)))
+    col = {k: i for i, k in enumerate(keys)}
+    spec = local.r_all[:, 0]
+    ballistic = local.into_backing[:, 0]
+    q_pow = res.q[:, None, :] ** np.arange(max_order)[None, :, None]  # (bands, j-1, k)
+    both = res.into_backing[:, None, :] * q_pow
+    viewed = integrate(res.k, res.r_all, lit, view, spec)
+    out[:, 0, col["viewed_reflectance"]] = viewed
+    out[:, 0, col["viewed_specular"]] = first_surface * overlap(lit, view)
+    out[:, 0, col["viewed_cone_reflectance"]] = integrate(res.k, res.r_cone, lit, view)
+    out[:, 0, col["outside_reflectance"]] = res.r_all[:, 0] - viewed
+    out[:, 0, col["viewed_transmittance"]] = integrate(res.k, res.into_backing, lit, view,
+                                                       ballistic)
+    up_all = both * res.e_all[:, None, :]
+    viewed_j = integrate(res.k, up_all, lit, view)
+    out[:, 1:, col["viewed_reflectance"]] = viewed_j
+    out[:, 1:, col["viewed_cone_reflectance"]] = integrate(
+        res.k, both * res.e_cone[:, None, :], lit, view)
+    out[:, 1:, col["outside_reflectance"]] = up_all[..., 0] - viewed_j
+    out[:, 1:, col["viewed_transmittance"]] = integrate(res.k, both * res.q[:, None, :], lit,
+                                                        view)
+    return out
+
