@@ -36,6 +36,7 @@ def design_command(
     verify_photons: int = typer.Option(None, help="photons for the verification (default "
                                        "--photons)"),
     precision: measure_options.Precision = None,
+    solver: measure_options.Solver = measure_options.DEFAULTS["solver"],
     designs: int = typer.Option(3, help="how many designs to report"),
     nodes: int = typer.Option(None, help="fast-model nodes per layer (default 6/4/3)"),
     seed: int = typer.Option(1, help="random seed"),
@@ -62,7 +63,7 @@ def design_command(
     photons = search.DEFAULT_PHOTONS if photons is None else photons
     if evaluate is not None:
         _evaluate(target, layer, evaluate, total, substrate, cement, instrument, target_tp,
-                  bands, photons, precision, seed, threads, plot, render, as_json)
+                  bands, photons, precision, seed, threads, plot, render, as_json, solver)
         return
     if render is not None:  # refuse a bad folder or substrate before the search
         from dentalux.design import render as design_render
@@ -75,12 +76,12 @@ def design_command(
     if t_inst != d_inst:  # read a stack target through its own instrument
         target = design_targets.parse(target, read=design_targets.read_through(
             target_instrument, bands=measure_options.bands(bands), photons=verify_photons
-            or photons, seed=seed + 2, threads=threads), instrument=t_inst)
+            or photons, seed=seed + 2, threads=threads, solver=solver), instrument=t_inst)
     res = optimise(target, layer, total=total, substrate=substrate, cement=cement,
                    instrument=instrument, bands=measure_options.bands(bands), target_tp=target_tp,
                    photons=photons, verify_photons=verify_photons, seed=seed,
                    designs=designs, nodes=nodes, threads=threads,
-                   progress=False if as_json else None, precision=precision)
+                   progress=False if as_json else None, precision=precision, solver=solver)
     res.target = design_targets.parse(res.target, instrument=t_inst)
     note = design_targets.differs_note(res.target, d_inst)
     if plot is not None:
@@ -180,7 +181,7 @@ def _setup_json(res, layer_specs=(), cement_spec=None) -> dict:
 
 
 def _evaluate(target, layer, evaluate, total, substrate, cement, instrument, target_tp, bands,
-              photons, precision, seed, threads, plot, render, as_json) -> None:
+              photons, precision, seed, threads, plot, render, as_json, solver) -> None:
     """``--evaluate``: read the given thicknesses and rank them (dentalux.design.evaluate)."""
     from dentalux.design.evaluate import evaluate as run
 
@@ -191,7 +192,7 @@ def _evaluate(target, layer, evaluate, total, substrate, cement, instrument, tar
     res = run(target, layer, evaluate, total=total, substrate=substrate, cement=cement,
               instrument=instrument, bands=measure_options.bands(bands), target_tp=target_tp,
               photons=photons, seed=seed, precision=precision, threads=threads,
-              progress=False if as_json else None)
+              progress=False if as_json else None, solver=solver)
     if as_json:
         print(dumps_checked(res.to_json(), "design --evaluate"))
         return

@@ -131,7 +131,8 @@ def evaluate(target, layers, candidates, total=None, substrate: str = "dentin", 
              target_tp: float | None = None, photons: int = 10_000, seed: int = 1,
              precision: float | None = None, illuminant: str = "D65", observer: str = "2",
              reconstruction: str = "hold", estimator: str = "weighted",
-             threads: int | None = None, progress: bool | None = False) -> EvaluationResult:
+             threads: int | None = None, progress: bool | None = False,
+             solver: str = "monte-carlo") -> EvaluationResult:
     """Read each of ``candidates`` (thicknesses [mm] top to bottom, or ``"T1/T2,..."``) of
     ``layers`` on ``substrate`` and rank them by ΔE00 to ``target`` (module doc). The
     arguments are :func:`dentalux.design.optimise`'s; ``precision`` (a standard error in
@@ -159,7 +160,7 @@ def evaluate(target, layers, candidates, total=None, substrate: str = "dentin", 
         check_data(cement[0], wl, "cement material")
     common = dict(bands=wl, illuminant=illuminant, observer=observer,
                   reconstruction=reconstruction, estimator=estimator, threads=threads,
-                  progress=progress)
+                  progress=progress, solver=solver)
     tgt = targets.parse(target, target_tp, read=lambda stack: dental.read(
         stack, instrument=inst, photons=photons, seed=seed + 2, precision=precision,
         **common))

@@ -89,7 +89,8 @@ class Surface:
 
     def __init__(self, parts, ranges, tail, inst, wl, rb_white, rb_black, colour: ColourMap,
                  photons: int, seed: int, black: bool, nodes: int | None = None,
-                 estimator: str = "weighted", threads: int | None = None, progress=None):
+                 estimator: str = "weighted", threads: int | None = None, progress=None,
+                 solver: str = "monte-carlo"):
         k = len(parts)
         n = int(nodes or DEFAULT_NODES[k])
         if n < 2:
@@ -109,27 +110,27 @@ class Surface:
         index = list(np.ndindex(*shape))
         self.photons = 0
         self.cpu_seconds = 0.0
-        from dentalux.progress import bar
 
         # every node is one reading of the engine (dentalux.reading): both backings from
         # the same walk, every node with the same seed
         pick = [reading.CHANNELS.index(f"over_{c}") for c in channels]
-        with bar(len(index), "design nodes", progress) as cb:
-            for step, idx in enumerate(index):
-                thick = [self.nodes[d][i] for d, i in enumerate(idx)] + tail_t
-                band_stacks = [
-                    [Layer(mua=float(o.mua[b]), mus=float(o.mus[b]), g=float(o.g[b]),
+
+        def stacks_at(idx):
+            thick = [self.nodes[d][i] for d, i in enumerate(idx)] + tail_t
+            return [[Layer(mua=float(o.mua[b]), mus=float(o.mus[b]), g=float(o.g[b]),
                            n=float(o.n[b]), thickness=t, fd=float(o.fd[b]))
                      for o, t in zip(optics, thick, strict=True)]
                     for b in range(len(wl))]
-                got = reading.measure(band_stacks, wl, inst, rb_black, rb_white, photons,
-                                      seed, estimator, threads, False)
-                self.values[idx] = got.values[pick]
-                self.errors[idx] = got.stderr[pick]
-                self.photons += got.photons
-                self.cpu_seconds += got.cpu_seconds
-                if cb:
-                    cb(step + 1)
+
+        # the layered solver solves every node together, each layer and thickness once
+        got_all = reading.engine.measure_many([stacks_at(idx) for idx in index], wl, inst,
+                                              rb_black, rb_white, photons, seed, estimator,
+                                              threads, progress, solver=solver)
+        for idx, got in zip(index, got_all, strict=True):
+            self.values[idx] = got.values[pick]
+            self.errors[idx] = got.stderr[pick]
+            self.photons += got.photons
+            self.cpu_seconds += got.cpu_seconds
 
     # -- interpolation -----------------------------------------------------------------
 

@@ -170,7 +170,7 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
              spacing: float = TOLERANCE_MM, check: bool = True, illuminant: str = "D65",
              observer: str = "2", reconstruction: str = "hold", estimator: str = "weighted",
              threads: int | None = None, progress: bool | None = False,
-             precision: float | None = None) -> DesignResult:
+             precision: float | None = None, solver: str = "monte-carlo") -> DesignResult:
     """Search layer thicknesses that match ``target`` read through ``instrument``.
 
     ``target``: ``lab:L,a,b``, ``GUIDE:TAB`` (data/shade_guides.csv), ``stack:MAT:MM/...``,
@@ -185,6 +185,7 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
     ``precision`` (a standard error in ΔE00 units) chooses ``photons`` and
     ``verify_photons`` instead: a pilot reading of the specimen at the middle of every
     thickness range sizes them (:func:`dentalux.dental.photons_for_precision`).
+    ``solver``: how every reading is computed (:data:`dentalux.reading.engine.SOLVERS`).
     """
     if precision is not None:
         dental.check_precision(precision)
@@ -238,7 +239,8 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
     rb_black = dental.backing_spectrum(inst.backing_black, wl, "backing_black")
     rb_white = dental.backing_spectrum(inst.backing_white, wl, "backing_white")
     common = dict(bands=wl, illuminant=illuminant, observer=observer,
-                  reconstruction=reconstruction, estimator=estimator, threads=threads)
+                  reconstruction=reconstruction, estimator=estimator, threads=threads,
+                  solver=solver)
 
     def read_stack(stack):
         return dental.read(stack, instrument=inst_plain, photons=verify_photons,
@@ -264,7 +266,7 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
     colour = ColourMap(wl, illuminant, observer, reconstruction)
     surface = Surface(parts, ranges, tail, inst, wl, rb_white, rb_black, colour, photons,
                       seed, black=tp, nodes=nodes, estimator=estimator, threads=threads,
-                      progress=progress)
+                      progress=progress, solver=solver)
 
     # dense search
     k = len(parts)

@@ -127,49 +127,69 @@ def _survival(rb_black, rb_white) -> float:
     return float(np.clip(max(np.max(rb_white), np.max(rb_black)), *SURVIVAL_RANGE))
 
 
-# the layered solver's last order sums, by specimen and window: a reading sized by
-# --precision, the replicate seeds of a test, read the same specimen again
+# the layered solver's last order sums, by specimen and window (about 130 kB each): a
+# reading sized by --precision, a design's nodes solved together, the replicate seeds of a
+# test read the same specimens again
 _SOLVED: dict = {}
-_SOLVED_KEEP = 8
+_SOLVED_KEEP = 256
 
 
-def _solve_orders(band_stacks, inst, n_below: float, cb, done: int) -> np.ndarray:
-    """The layered solver's order sums (bands, orders + 1, keys) through ``inst``'s window
-    for a laterally infinite specimen, in chunks of bands of one set of indices."""
-    key = (tuple(tuple(lay.as_tuple(i) for i, lay in enumerate(stack))
-                 for stack in band_stacks), inst.window(0.0), float(n_below))
-    if key in _SOLVED:
-        if cb:
-            cb(done + len(band_stacks))
-        return _SOLVED[key]
-    out = _solve_orders_uncached(band_stacks, inst, n_below, cb, done)
-    if len(_SOLVED) >= _SOLVED_KEEP:
-        _SOLVED.pop(next(iter(_SOLVED)))
-    _SOLVED[key] = out
+def _solve_key(band_stacks, inst, n_below: float) -> tuple:
+    return (tuple(tuple(lay.as_tuple(i) for i, lay in enumerate(stack))
+                  for stack in band_stacks), inst.window(0.0), float(n_below))
+
+
+def _solve_orders(specimens, inst, n_below: float, cb, done: int) -> list[np.ndarray]:
+    """The layered solver's order sums (bands, orders + 1, keys) of each specimen (one stack
+    per band) through ``inst``'s window, for laterally infinite specimens; kept in _SOLVED."""
+    keys = [_solve_key(bs, inst, n_below) for bs in specimens]
+    todo = [i for i, k in enumerate(keys) if k not in _SOLVED]
+    fresh = dict(zip(todo, _solve_orders_uncached([specimens[i] for i in todo], inst,
+                                                  n_below, cb, done), strict=True))
+    out = [fresh[i] if i in fresh else _SOLVED[key] for i, key in enumerate(keys)]
+    for i, value in fresh.items():
+        if len(_SOLVED) >= _SOLVED_KEEP:
+            _SOLVED.pop(next(iter(_SOLVED)))
+        _SOLVED[keys[i]] = value
+    if cb:
+        cb(done + sum(len(bs) for bs in specimens))
     return out
 
 
-def _solve_orders_uncached(band_stacks, inst, n_below: float, cb, done: int) -> np.ndarray:
+def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int
+                           ) -> list[np.ndarray]:
+    """:func:`_solve_orders` without the cache: chunks of bands of one set of refractive
+    indices, every specimen within a chunk, so that specimens sharing a layer (a design's
+    nodes) share its operators (layered.reuse)."""
     from dentalux.reading import layered
 
     a0, a, b0, b, _, _, cone = inst.window(0.0)
-    out = np.zeros((len(band_stacks), MAX_ORDER + 1, len(WINDOW_KEYS)))
+    outs = [np.zeros((len(bs), MAX_ORDER + 1, len(WINDOW_KEYS))) for bs in specimens]
     groups: dict[tuple, list[int]] = {}
-    for i, stack in enumerate(band_stacks):
-        groups.setdefault(tuple(lay.n for lay in stack), []).append(i)
-    for indices, members in groups.items():
+    for spec_i, bs in enumerate(specimens):
+        for i, stack in enumerate(bs):
+            groups.setdefault((spec_i, tuple(lay.n for lay in stack)), []).append(i)
+    by_indices: dict[tuple, list[tuple[int, list[int]]]] = {}
+    for (spec_i, indices), members in groups.items():
+        by_indices.setdefault(indices, []).append((spec_i, members))
+    for indices, entries in by_indices.items():
         first = float(_core.fresnel_reflectance([1.0], 1.0, indices[0])[0])
-        for lo in range(0, len(members), LAYERED_CHUNK):
-            idx = members[lo:lo + LAYERED_CHUNK]
-            group = [band_stacks[i] for i in idx]
-            res = layered.responses(group, 1.0, n_below, cone)
-            local = layered.local_parts(group, 1.0, n_below)
-            out[idx] = layered.order_sums(res, local, first, (a0, a), (b0, b), MAX_ORDER,
-                                          WINDOW_KEYS)
-            done += len(idx)
-            if cb:
-                cb(done)
-    return out
+        longest = max(len(m) for _, m in entries)
+        for lo in range(0, longest, LAYERED_CHUNK):
+            with layered.reuse():
+                for spec_i, members in entries:
+                    idx = members[lo:lo + LAYERED_CHUNK]
+                    if not idx:
+                        continue
+                    group = [specimens[spec_i][i] for i in idx]
+                    res = layered.responses(group, 1.0, n_below, cone)
+                    local = layered.local_parts(group, 1.0, n_below)
+                    outs[spec_i][idx] = layered.order_sums(res, local, first, (a0, a),
+                                                           (b0, b), MAX_ORDER, WINDOW_KEYS)
+                    done += len(idx)
+                    if cb:
+                        cb(done)
+    return outs
 
 
 def solved(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
@@ -188,9 +208,9 @@ def solved(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
     start_cpu, start = time.process_time(), time.perf_counter()
     total = wl_count * runs * (2 if rim else 1)
     with bar(total, "bands", progress) as cb:
-        sums = _solve_orders(band_stacks, inst, n_below, cb, 0)
-        t_sums = sums if contact is None else _solve_orders(band_stacks, inst, 1.0, cb,
-                                                            wl_count)
+        sums = _solve_orders([band_stacks], inst, n_below, cb, 0)[0]
+        t_sums = sums if contact is None else _solve_orders([band_stacks], inst, 1.0, cb,
+                                                            wl_count)[0]
         solver_cpu = time.process_time() - start_cpu
         if not rim:
             n_rep = np.ones(1)
@@ -404,6 +424,32 @@ def use_layered(inst, solver: str) -> bool:
     if why and solver == "layered":
         raise ValueError(why)
     return why is None
+
+
+def measure_many(specimens, wl, inst, rb_black, rb_white, photons: int, seed: int,
+                 estimator: str = "weighted", threads=None, progress=False,
+                 solver: str = "monte-carlo") -> list[ReadSpectra]:
+    """:func:`measure` of several specimens (a design's nodes) with the same seed; the
+    layered solver solves them together, each layer and thickness once."""
+    shared_cpu = 0.0
+    if use_layered(inst, solver) and not inst.is_infinite:
+        contact = inst.contact_index
+        start_cpu = time.process_time()
+        with bar(len(specimens) * len(wl), "bands solved", progress) as cb:
+            _solve_orders(specimens, inst, 1.0 if contact is None else float(contact), cb, 0)
+            if contact is not None:
+                _solve_orders(specimens, inst, 1.0, None, 0)
+        # the solve's CPU shared among the readings it served
+        shared_cpu = (time.process_time() - start_cpu) / max(len(specimens), 1)
+    out = []
+    with bar(len(specimens), "readings", progress) as cb:
+        for bs in specimens:
+            out.append(measure(bs, wl, inst, rb_black, rb_white, photons, seed, estimator,
+                               threads, False, solver=solver))
+            out[-1].cpu_seconds += shared_cpu
+            if cb:
+                cb(len(out))
+    return out
 
 
 def measure(band_stacks, wl, inst, rb_black, rb_white, photons: int, seed: int,

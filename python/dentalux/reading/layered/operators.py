@@ -16,6 +16,7 @@ exp(kappa (z - d)) (Re kappa >= 0, so nothing overflows) meet L+(0) = x and L-(d
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -80,11 +81,50 @@ def coupling(modes: int) -> np.ndarray:
     return c
 
 
+# operators kept while reading several specimens that share layers (:func:`reuse`): a
+# design's nodes repeat each material and each thickness
+_KEPT: dict | None = None
+
+
+@contextmanager
+def reuse():
+    """Within this block a layer's eigenvectors (per material) and its reflection and
+    transmission (per material and thickness) are computed once and kept; they are dropped
+    on leaving it (they take tens of MB each)."""
+    global _KEPT
+    outer = _KEPT
+    _KEPT = {} if outer is None else outer
+    try:
+        yield
+    finally:
+        if outer is None:
+            _KEPT = None
+
+
+def kept(key, make):
+    """``make()``, or its kept value under ``key`` inside :func:`reuse`."""
+    if _KEPT is None:
+        return make()
+    if key not in _KEPT:
+        _KEPT[key] = make()
+    return _KEPT[key]
+
+
 def layer(optics, thickness: float, n: float, nodes: Nodes, ks, modes: int
           ) -> tuple[np.ndarray, np.ndarray]:
     """Reflection and transmission of a homogeneous layer (the same from above and below)
     for every band of ``optics`` = (mua, mus, chi) and every k in ``ks``:
     (bands, len(ks), M, M) each, M = modes x nodes in the layer."""
+    mua, mus, chi = optics
+    ks = np.asarray(ks, float)
+    key = (mua.tobytes(), mus.tobytes(), chi.tobytes(), float(n), nodes.s.tobytes(),
+           ks.tobytes(), int(modes))
+    eig = kept(key, lambda: _eigen(optics, n, nodes, ks, modes))
+    return kept(key + (float(thickness),), lambda: _slab(eig, thickness))
+
+
+def _eigen(optics, n: float, nodes: Nodes, ks: np.ndarray, modes: int):
+    """The thickness-free part of :func:`layer`: the modes' eigenvectors and constants."""
     mua, mus, chi = optics
     order = chi.shape[1] - 1
     mu, w = nodes.mu(n), nodes.weights(n)
@@ -112,10 +152,15 @@ def layer(optics, thickness: float, n: float, nodes: Nodes, ks, modes: int
     p = v + np.linalg.solve(apb.astype(complex), v * kappa[..., None, :])
     q = 2 * v - p
     pinv = np.linalg.inv(p)
-    x = pinv @ q
+    return p, pinv, pinv @ q, kappa
+
+
+def _slab(eig, thickness: float) -> tuple[np.ndarray, np.ndarray]:
+    """A layer's reflection and transmission at ``thickness`` from :func:`_eigen`'s parts."""
+    p, pinv, x, kappa = eig
     e = np.exp(-kappa * thickness)[..., None, :]  # right-multiplying by diag(E)
     xe = x * e
-    eye = np.eye(size)
+    eye = np.eye(x.shape[-1])
     inner = np.linalg.inv(eye - xe @ xe) @ pinv
     r = p @ (x - np.swapaxes(e, -1, -2) * xe) @ inner
     t = p @ (eye * e - x @ xe) @ inner

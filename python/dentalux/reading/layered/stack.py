@@ -70,12 +70,21 @@ def response(band_stacks, ks, n_above: float, n_below: float, cone_deg, modes: i
     first = band_stacks[0]
     nodes = make_nodes([n_above] + [lay.n for lay in first] + [n_below], per_interval)
     total = ops.interface(n_above, first[0].n, nodes, modes)
+    ks = np.asarray(ks, float)
+    prefix: tuple = ("stack", nodes.s.tobytes(), ks.tobytes(), int(modes), float(n_above))
     for i, lay in enumerate(first):
-        r, t = ops.layer(_optics(band_stacks, i, order), lay.thickness, lay.n, nodes, ks,
-                         modes)
-        total = ops.add(total, ops.Element(r, t, r, t))
+        optics = _optics(band_stacks, i, order)
         n_next = first[i + 1].n if i + 1 < len(first) else n_below
-        total = ops.add(total, ops.interface(lay.n, n_next, nodes, modes))
+        # the stack down to here, kept for specimens that share it (ops.reuse)
+        prefix += (tuple(o.tobytes() for o in optics), float(lay.thickness), float(lay.n),
+                   float(n_next))
+
+        def extend(above=total, lay=lay, optics=optics, n_next=n_next):
+            r, t = ops.layer(optics, lay.thickness, lay.n, nodes, ks, modes)
+            return ops.add(ops.add(above, ops.Element(r, t, r, t)),
+                           ops.interface(lay.n, n_next, nodes, modes))
+
+        total = ops.kept(prefix, extend)
     top, bot = nodes.count(n_above), nodes.count(n_below)
     flux_top = 2 * np.pi * nodes.weights(n_above) * nodes.mu(n_above)
     flux_bot = 2 * np.pi * nodes.weights(n_below) * nodes.mu(n_below)
