@@ -20,9 +20,12 @@ Every command that reads a specimen (``shade``, ``design``'s nodes and verificat
 
 from __future__ import annotations
 
+import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from dentalux import _core, limits
 from dentalux.progress import bar
@@ -49,8 +52,9 @@ WALKS = ("per-band", "shared")
 #: deterministic solver of dentalux.reading.layered, with a Monte Carlo walk for what the
 #: specimen's rim takes), or 'auto' (layered where it holds, else monte-carlo)
 SOLVERS = ("monte-carlo", "layered", "auto")
-# bands solved together by the layered solver (its matrices: about 40 MB per band)
-LAYERED_CHUNK = 8
+# bands solved together by the layered solver, one chunk per thread (a design's kept
+# operators take up to about 50 MB per band of a chunk)
+LAYERED_CHUNK = 4
 
 
 def stacks(parts, wl) -> list[list[Layer]]:
@@ -139,13 +143,14 @@ def _solve_key(band_stacks, inst, n_below: float) -> tuple:
                   for stack in band_stacks), inst.window(0.0), float(n_below))
 
 
-def _solve_orders(specimens, inst, n_below: float, cb, done: int) -> list[np.ndarray]:
+def _solve_orders(specimens, inst, n_below: float, cb, done: int,
+                  threads: int | None = None) -> list[np.ndarray]:
     """The layered solver's order sums (bands, orders + 1, keys) of each specimen (one stack
     per band) through ``inst``'s window, for laterally infinite specimens; kept in _SOLVED."""
     keys = [_solve_key(bs, inst, n_below) for bs in specimens]
     todo = [i for i, k in enumerate(keys) if k not in _SOLVED]
     fresh = dict(zip(todo, _solve_orders_uncached([specimens[i] for i in todo], inst,
-                                                  n_below, cb, done), strict=True))
+                                                  n_below, cb, done, threads), strict=True))
     out = [fresh[i] if i in fresh else _SOLVED[key] for i, key in enumerate(keys)]
     for i, value in fresh.items():
         if len(_SOLVED) >= _SOLVED_KEEP:
@@ -156,8 +161,8 @@ def _solve_orders(specimens, inst, n_below: float, cb, done: int) -> list[np.nda
     return out
 
 
-def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int
-                           ) -> list[np.ndarray]:
+def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int,
+                           threads: int | None = None) -> list[np.ndarray]:
     """:func:`_solve_orders` without the cache: chunks of bands of one set of refractive
     indices, every specimen within a chunk, so that specimens sharing a layer (a design's
     nodes) share its operators (layered.reuse)."""
@@ -172,23 +177,36 @@ def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int
     by_indices: dict[tuple, list[tuple[int, list[int]]]] = {}
     for (spec_i, indices), members in groups.items():
         by_indices.setdefault(indices, []).append((spec_i, members))
-    for indices, entries in by_indices.items():
+    chunks = [(indices, entries, lo) for indices, entries in by_indices.items()
+              for lo in range(0, max(len(m) for _, m in entries), LAYERED_CHUNK)]
+
+    def solve(chunk) -> int:
+        indices, entries, lo = chunk
         first = float(_core.fresnel_reflectance([1.0], 1.0, indices[0])[0])
-        longest = max(len(m) for _, m in entries)
-        for lo in range(0, longest, LAYERED_CHUNK):
-            with layered.reuse():
-                for spec_i, members in entries:
-                    idx = members[lo:lo + LAYERED_CHUNK]
-                    if not idx:
-                        continue
-                    group = [specimens[spec_i][i] for i in idx]
-                    res = layered.responses(group, 1.0, n_below, cone)
-                    local = layered.local_parts(group, 1.0, n_below)
-                    outs[spec_i][idx] = layered.order_sums(res, local, first, (a0, a),
-                                                           (b0, b), MAX_ORDER, WINDOW_KEYS)
-                    done += len(idx)
-                    if cb:
-                        cb(done)
+        count = 0
+        with layered.reuse():
+            for spec_i, members in entries:
+                idx = members[lo:lo + LAYERED_CHUNK]
+                if not idx:
+                    continue
+                group = [specimens[spec_i][i] for i in idx]
+                res = layered.responses(group, 1.0, n_below, cone)
+                local = layered.local_parts(group, 1.0, n_below)
+                outs[spec_i][idx] = layered.order_sums(res, local, first, (a0, a), (b0, b),
+                                                       MAX_ORDER, WINDOW_KEYS)
+                count += len(idx)
+        return count
+
+    # chunks on threads (numpy's LAPACK calls release the GIL), each with one BLAS thread:
+    # BLAS's own threads on matrices of this size spin more than they compute (measured:
+    # 3 CPU-s for an enamel solve with one, 24-64 with BLAS's threads on a loaded machine)
+    workers = min(len(chunks), threads or os.cpu_count() or 1)
+    with threadpool_limits(limits=1, user_api="blas"), \
+            ThreadPoolExecutor(max_workers=max(workers, 1)) as pool:
+        for count in pool.map(solve, chunks):
+            done += count
+            if cb:
+                cb(done)
     return outs
 
 
@@ -208,9 +226,9 @@ def solved(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
     start_cpu, start = time.process_time(), time.perf_counter()
     total = wl_count * runs * (2 if rim else 1)
     with bar(total, "bands", progress) as cb:
-        sums = _solve_orders([band_stacks], inst, n_below, cb, 0)[0]
+        sums = _solve_orders([band_stacks], inst, n_below, cb, 0, threads)[0]
         t_sums = sums if contact is None else _solve_orders([band_stacks], inst, 1.0, cb,
-                                                            wl_count)[0]
+                                                            wl_count, threads)[0]
         solver_cpu = time.process_time() - start_cpu
         if not rim:
             n_rep = np.ones(1)
@@ -392,10 +410,12 @@ def infinite_solved(band_stacks, rb_black, rb_white, contact: float | None = Non
         groups.setdefault(tuple(lay.n for lay in stack), []).append(i)
     for members in groups.values():
         group = [band_stacks[i] for i in members]
-        res = layered.responses(group, 1.0, n_below, None, ks=(0.0,))
+        with threadpool_limits(limits=1, user_api="blas"):
+            res = layered.responses(group, 1.0, n_below, None, ks=(0.0,))
+            air = res if contact is None else layered.responses(group, 1.0, 1.0, None,
+                                                                ks=(0.0,))
         vals[:4, members] = [res.r_all[:, 0], res.into_backing[:, 0], res.q[:, 0],
                              res.e_all[:, 0]]
-        air = res if contact is None else layered.responses(group, 1.0, 1.0, None, ks=(0.0,))
         vals[4, members] = air.into_backing[:, 0]
 
     def combine(batch):  # (..., 5, bands) -> (..., 3, bands)
@@ -436,9 +456,10 @@ def measure_many(specimens, wl, inst, rb_black, rb_white, photons: int, seed: in
         contact = inst.contact_index
         start_cpu = time.process_time()
         with bar(len(specimens) * len(wl), "bands solved", progress) as cb:
-            _solve_orders(specimens, inst, 1.0 if contact is None else float(contact), cb, 0)
+            _solve_orders(specimens, inst, 1.0 if contact is None else float(contact), cb, 0,
+                          threads)
             if contact is not None:
-                _solve_orders(specimens, inst, 1.0, None, 0)
+                _solve_orders(specimens, inst, 1.0, None, 0, threads)
         # the solve's CPU shared among the readings it served
         shared_cpu = (time.process_time() - start_cpu) / max(len(specimens), 1)
     out = []

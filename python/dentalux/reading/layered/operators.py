@@ -16,6 +16,7 @@ exp(kappa (z - d)) (Re kappa >= 0, so nothing overflows) meet L+(0) = x and L-(d
 
 from __future__ import annotations
 
+import threading
 from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import lru_cache
@@ -82,32 +83,34 @@ def coupling(modes: int) -> np.ndarray:
 
 
 # operators kept while reading several specimens that share layers (:func:`reuse`): a
-# design's nodes repeat each material and each thickness
-_KEPT: dict | None = None
+# design's nodes repeat each material and each thickness. Per thread: bands are solved in
+# chunks on several threads, each with its own
+_LOCAL = threading.local()
 
 
 @contextmanager
 def reuse():
-    """Within this block a layer's eigenvectors (per material) and its reflection and
-    transmission (per material and thickness) are computed once and kept; they are dropped
-    on leaving it (they take tens of MB each)."""
-    global _KEPT
-    outer = _KEPT
-    _KEPT = {} if outer is None else outer
+    """Within this block (on this thread) a layer's eigenvectors (per material) and its
+    reflection and transmission (per material and thickness) are computed once and kept;
+    they are dropped on leaving it (they take tens of MB each)."""
+    outer = getattr(_LOCAL, "kept", None)
+    if outer is None:
+        _LOCAL.kept = {}
     try:
         yield
     finally:
         if outer is None:
-            _KEPT = None
+            _LOCAL.kept = None
 
 
 def kept(key, make):
     """``make()``, or its kept value under ``key`` inside :func:`reuse`."""
-    if _KEPT is None:
+    store = getattr(_LOCAL, "kept", None)
+    if store is None:
         return make()
-    if key not in _KEPT:
-        _KEPT[key] = make()
-    return _KEPT[key]
+    if key not in store:
+        store[key] = make()
+    return store[key]
 
 
 def layer(optics, thickness: float, n: float, nodes: Nodes, ks, modes: int
