@@ -11,17 +11,43 @@ precision. Methods, each through the default instrument (the contact probe), 41 
 - ``backing-orders``: the reading engine (dentalux.reading): one walk per band tallied by
   backing order, black, white and transmitted from the same photons;
 - ``shared-walks``: the engine with every band from shared walks (a hero band per photon,
-  ``walks="shared"``), the same number of walks.
+  ``walks="shared"``), the same number of walks;
+- ``layered``: the engine's deterministic solver (``solver="layered"``,
+  dentalux.reading.layered), exact for a laterally infinite specimen; the probe's 10 mm
+  specimen is finite, so a walk of the same photons per band tallies what its rim takes, and
+  that walk is the reading's only noise.
+
+The layered reading's CPU has a fixed part, the solver (deterministic, the same for every
+seed), and a part that grows with photons, the rim walk; variance × CPU-s only means
+something for the second, so the two are reported apart. The engine caches the solver's
+result per specimen (``engine._SOLVED``): the cache is cleared once per case, the first
+seed's reading pays the solver and gives its CPU, and every reading's walk CPU is its CPU
+less its solver's (none once cached); solving again at every seed would measure the same
+fixed cost once per seed. The layered gain column is variance × walk CPU-s; ``bo/layered``
+beside it is how many times the CPU-s of one layered reading (solver and walk)
+backing-orders needs to reach the layered spread (variance_bo × CPU-s_bo / sd_layered²,
+over the layered CPU-s): the choice for one reading of a new specimen. OpenBLAS runs on one
+thread (OPENBLAS_NUM_THREADS, unless already set): with its own threads on the loaded
+machine the solver's CPU counted their waiting, 7-20 times its work.
 
 Cases: enamel 1 mm; dentin 2 mm; the two-layer stack enamel 0.6 / dentin 0.9 mm. For every
 quantity the variance is the spread over seeds (not the claimed standard error), so the
 figure needs no trust in either method's error estimate; the claimed s.e. is printed beside
-it as a check. ``--seeds`` and ``--photons`` size the run.
+it as a check. ``--seeds`` and ``--photons`` size the run, ``--methods`` picks some of the
+methods (gains are relative to the first picked, in the order above).
 
     .venv/bin/python benchmarks/precision.py [--seeds 8] [--photons 10000]
+        [--methods backing-orders layered]
 """
 
 from __future__ import annotations
+
+import os
+
+# one OpenBLAS thread for the layered solver's CPU (module doc): one enamel solve took 24-64
+# CPU-s with OpenBLAS's own threads on the loaded 2-core machine, 3.1-3.4 with one. Set
+# before numpy is imported; a value already set is kept
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
 import time
@@ -29,6 +55,7 @@ import time
 import numpy as np
 from dentalux import dental, instrument, reading
 from dentalux.color import system
+from dentalux.reading import engine as reading_engine
 from dentalux.slab import simulate
 from dentalux.spectra import Reconstruction, resolve_bands
 
@@ -70,51 +97,83 @@ def separate_runs(parts, photons: int, seed: int) -> tuple[dict, float]:
     return flat, cpu
 
 
-METHODS = ("separate-runs", "backing-orders", "shared-walks")
+METHODS = ("separate-runs", "backing-orders", "shared-walks", "layered")
+# how the engine reads for each method but separate-runs: (walks, solver)
+ENGINE = {"backing-orders": ("per-band", "monte-carlo"), "shared-walks": ("shared", "monte-carlo"),
+          "layered": ("per-band", "layered")}
 
 
-def engine(parts, photons: int, seed: int, walks: str = "per-band") -> tuple[dict, float, dict]:
+def engine(parts, photons: int, seed: int, walks: str = "per-band",
+           solver: str = "monte-carlo") -> tuple[dict, float, dict, float]:
+    """A reading through the engine: the values, CPU-s, claimed s.e. and the solver's CPU-s
+    (0 for the walks, and for a layered reading whose solution was cached)."""
     m = dental.read(parts, instrument=instrument.DEFAULT, photons=photons, seed=seed,
-                    walks=walks)
+                    walks=walks, solver=solver)
     flat = {"tp00": m.tp00, "cr": m.cr}
     for key in ("lab_black", "lab_white"):
         for j, c in enumerate("Lab"):
             flat[f"{key}.{c}"] = getattr(m, key)[j]
-    return flat, m.cpu_seconds, m.stderr
+    return flat, m.cpu_seconds, m.stderr, m.fixed_cpu_seconds
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=8)
     ap.add_argument("--photons", type=int, default=10_000)
+    ap.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS),
+                    help="methods to run (default: all); gains are relative to the first "
+                         "in the order " + ", ".join(METHODS))
     args = ap.parse_args()
+    methods = [m for m in METHODS if m in args.methods]
+    ref = methods[0]
     print(f"instrument {instrument.DEFAULT}, 41 bands, {args.photons} photons per band and "
           f"walk, {args.seeds} seeds; variance = spread over seeds")
     for case, parts in CASES.items():
-        runs = {m: [] for m in METHODS}
-        cpu = dict.fromkeys(METHODS, 0.0)
-        claimed = {m: [] for m in METHODS[1:]}
+        runs = {m: [] for m in methods}
+        cpu = dict.fromkeys(methods, 0.0)
+        claimed = {m: [] for m in methods if m != "separate-runs"}
+        solver_cpu = 0.0
+        # the first layered reading of the case pays the solver (module doc)
+        reading_engine._SOLVED.clear()
         for seed in range(1, args.seeds + 1):
-            flat, c = separate_runs(parts, args.photons, seed)
-            runs["separate-runs"].append(flat)
-            cpu["separate-runs"] += c
-            for method, walks in (("backing-orders", "per-band"), ("shared-walks", "shared")):
-                flat, c, se = engine(parts, args.photons, seed, walks)
+            if "separate-runs" in methods:
+                flat, c = separate_runs(parts, args.photons, seed)
+                runs["separate-runs"].append(flat)
+                cpu["separate-runs"] += c
+            for method in claimed:
+                flat, c, se, fixed = engine(parts, args.photons, seed, *ENGINE[method])
                 runs[method].append(flat)
-                cpu[method] += c
+                cpu[method] += c - fixed  # the walk's CPU; the solver's is kept apart
+                solver_cpu += fixed
                 claimed[method].append(se)
         print(f"\n{case}")
         per = {m: cpu[m] / args.seeds for m in cpu}
-        print("  CPU-s per reading: " + ", ".join(f"{m} {per[m]:.2f}" for m in per))
-        print("  sd over seeds (claimed s.e.) and variance x CPU-s relative to separate-runs "
-              "(gain: how many times cheaper to the same standard error)")
+        # the CPU-s of one layered reading of a new specimen: the solver and the walk
+        whole = per.get("layered", 0.0) + solver_cpu
+        print("  CPU-s per reading: " + ", ".join(
+            f"{m} {whole:.2f} (solver {solver_cpu:.2f} once, walk {per[m]:.2f})"
+            if m == "layered" else f"{m} {per[m]:.2f}" for m in per))
+        print(f"  sd over seeds (claimed s.e.) and variance x CPU-s relative to {ref} "
+              "(gain: how many times cheaper to the same standard error; layered: walk "
+              "CPU-s only)")
+        if "layered" in methods and "backing-orders" in methods:
+            print("  bo/layered: CPU-s backing-orders needs for the layered sd, over the "
+                  "layered CPU-s per reading (solver and walk)")
         for q in QUANTITIES:
             sd = {m: float(np.std([r[q] for r in runs[m]], ddof=1)) for m in runs}
             merit = {m: sd[m] ** 2 * per[m] for m in runs}
-            cells = [f"{METHODS[0]} {sd[METHODS[0]]:.3f}"]
-            for m in METHODS[1:]:
+            cells = [f"{ref} {sd[ref]:.3f}"] if ref == "separate-runs" else []
+            for m in methods:
+                if m == "separate-runs":
+                    continue
                 se = float(np.mean([c[q] for c in claimed[m]]))
-                cells.append(f"{m} {sd[m]:.3f} ({se:.3f}) gain {merit[METHODS[0]] / merit[m]:.1f}x")
+                cell = f"{m} {sd[m]:.3f} ({se:.3f})"
+                if m != ref:
+                    cell += f" gain {merit[ref] / merit[m]:.1f}x"
+                if m == "layered" and "backing-orders" in methods:
+                    ratio = merit["backing-orders"] / sd[m] ** 2 / whole
+                    cell += f" bo/layered {ratio:.3g}x"
+                cells.append(cell)
             print(f"  {q:12s} " + "; ".join(cells))
 
 
