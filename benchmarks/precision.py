@@ -26,9 +26,9 @@ less its solver's (none once cached); solving again at every seed would measure 
 fixed cost once per seed. The layered gain column is variance × walk CPU-s; ``bo/layered``
 beside it is how many times the CPU-s of one layered reading (solver and walk)
 backing-orders needs to reach the layered spread (variance_bo × CPU-s_bo / sd_layered²,
-over the layered CPU-s): the choice for one reading of a new specimen. OpenBLAS runs on one
-thread (OPENBLAS_NUM_THREADS, unless already set): with its own threads on the loaded
-machine the solver's CPU counted their waiting, 7-20 times its work.
+over the layered CPU-s): the choice for one reading of a new specimen. (The engine runs the
+solver's BLAS on one thread per chunk of bands: with BLAS's own threads the loaded machine
+counted their waiting, 7-20 times the work.)
 
 Cases: enamel 1 mm; dentin 2 mm; the two-layer stack enamel 0.6 / dentin 0.9 mm. For every
 quantity the variance is the spread over seeds (not the claimed standard error), so the
@@ -41,13 +41,6 @@ methods (gains are relative to the first picked, in the order above).
 """
 
 from __future__ import annotations
-
-import os
-
-# one OpenBLAS thread for the layered solver's CPU (module doc): one enamel solve took 24-64
-# CPU-s with OpenBLAS's own threads on the loaded 2-core machine, 3.1-3.4 with one. Set
-# before numpy is imported; a value already set is kept
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
 import time
