@@ -61,13 +61,17 @@ class Nodes:
         return self.etendue[: self.count(n)] / (self.mu(n) * n**2)
 
 
-def make_nodes(indices, per_interval: int) -> Nodes:
+def make_nodes(indices, per_interval) -> Nodes:
     """Nodes for media of refractive ``indices`` (the first is the medium above), with
-    ``per_interval`` nodes between consecutive distinct indices (module doc)."""
+    ``per_interval`` nodes between consecutive distinct indices (module doc): a count, or
+    (count where light can leave into the medium above, count where it is trapped)."""
+    leave, trapped = (per_interval if isinstance(per_interval, tuple)
+                      else (per_interval, per_interval))
     breaks = sorted({0.0, *map(float, indices)})
     s_all, e_all = [], []
     for i, (lo, hi) in enumerate(itertools.pairwise(breaks)):
-        x, w = _radau(per_interval + 1) if i == 0 else _gauss(per_interval)
+        count = leave if hi <= float(indices[0]) else trapped
+        x, w = _radau(count + 1) if i == 0 else _gauss(count)
         # every interval ends at an index; its owner is the medium of that index
         mu_lo = np.sqrt(1 - (lo / hi) ** 2)
         mu = x * mu_lo

@@ -11,9 +11,11 @@ from dentalux.reading.layered import operators as ops
 from dentalux.reading.layered import single
 from dentalux.reading.layered.quadrature import cone_weights, make_nodes
 
-#: quadrature nodes between consecutive refractive indices (the first interval adds one at
+#: quadrature nodes between consecutive refractive indices: 8 where light can leave into the
+#: medium above (what the detector sees), 6 where it is trapped by total internal reflection
+#: (fewer there, 5, read the 16 test windows less well; the first interval adds one node at
 #: normal incidence)
-NODES_PER_INTERVAL = 8
+NODES_PER_INTERVAL = (8, 6)
 #: Legendre moments kept before the delta-M truncation. With the single-scattering
 #: correction (single.py) 16 moments read the detector cone within 0.1 % at k = 0; more
 #: moments than the nodes resolve (about 2 per node and interval) make the kernels ring
@@ -64,7 +66,7 @@ def _optics(band_stacks, index: int, order: int):
 
 
 def response(band_stacks, ks, n_above: float, n_below: float, cone_deg, modes: int,
-             per_interval: int = NODES_PER_INTERVAL, order: int = ORDER) -> Response:
+             per_interval=NODES_PER_INTERVAL, order: int = ORDER) -> Response:
     """Solve one stack per band (slab ``Layer`` lists, top first, with the same indices and
     thicknesses in every band) at the spatial frequencies ``ks``, with ``modes`` modes."""
     first = band_stacks[0]
