@@ -233,3 +233,14 @@ def test_two_designs_a_third_of_a_unit_apart_rank_correctly_over_seeds():
     runs = [ranked(5_000, 100 + s) for s in range(20)]
     right = sum(r[(0.6, 0.95)] < r[(0.6, 0.975)] for r in runs)
     assert right >= 19, (right, runs)
+
+
+def test_instruments_validate_reads_with_the_layered_solver():
+    # the natural incisor through 45-0, noise-free but for the rim correction: inside the
+    # published 45:0 range in L*, a* and b* (Wee et al. 2023), as the Monte Carlo reads it
+    from dentalux import instrument_classes as ic
+
+    res = ic.validate(photons=4000, bands=(450.0, 550.0, 650.0), presets=["45-0"],
+                      solver="layered")
+    (row,) = res["presets"]
+    assert row["name"] == "45-0" and row["inside"], row

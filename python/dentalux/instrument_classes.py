@@ -62,10 +62,10 @@ def check(lab, published: dict) -> list[bool]:
 
 
 def validate(photons: int = PHOTONS, bands=BANDS, seed: int = 1, threads=None,
-             presets=None) -> dict:
+             presets=None, solver: str = "monte-carlo") -> dict:
     """``{"presets": [{name, class, reading: {lab}, published: {mean, sd, sources}, inside}]}``
     for every preset whose class has published natural-tooth readings. ``presets`` (names)
-    restricts the list (None: every preset)."""
+    restricts the list (None: every preset); ``solver`` as :func:`dentalux.dental.read`'s."""
     from dentalux import dental
 
     cls = classes()
@@ -76,7 +76,7 @@ def validate(photons: int = PHOTONS, bands=BANDS, seed: int = 1, threads=None,
         if pub is None or (presets is not None and name not in presets):
             continue
         m = dental.read(specimen, instrument=inst, photons=photons, bands=list(bands),
-                        seed=seed, threads=threads)
+                        seed=seed, threads=threads, solver=solver)
         lab = [float(x) for x in m.lab_white]
         out.append({"name": name, "class": inst.instrument_class, "reading": {"lab": lab},
                     "published": {k: pub[k] for k in ("mean", "sd", "sources")},

@@ -56,6 +56,8 @@ def validate_command(
     bands: str = typer.Option(None, help="comma-separated wavelengths [nm] (default "
                               "450,500,550,600,650)"),
     seed: int = typer.Option(1, help="random seed"),
+    solver: str = typer.Option("monte-carlo", help="monte-carlo | layered | auto (as "
+                               "`dentalux shade --solver`; layered refuses the d/8 presets)"),
 ) -> None:
     """The natural incisor read by every preset beside its class's published readings."""
     from dentalux import instrument_classes as ic
@@ -69,7 +71,8 @@ def validate_command(
         except ValueError:
             raise ValueError(f"--bands = {bands!r}: expected comma-separated wavelengths "
                              "[nm]") from None
-    res = ic.validate(photons=ic.PHOTONS if photons is None else photons, bands=wl, seed=seed)
+    res = ic.validate(photons=ic.PHOTONS if photons is None else photons, bands=wl, seed=seed,
+                      solver=solver)
     if as_json:
         print(dumps_checked(res, "instruments validate"))
         return
