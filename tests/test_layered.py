@@ -235,3 +235,19 @@ def test_instruments_validate_reads_with_the_layered_solver():
                       solver="layered")
     (row,) = res["presets"]
     assert row["name"] == "45-0" and row["inside"], row
+
+
+def test_clear_layers_and_extreme_media_solve_to_finite_energy_conserving_numbers():
+    # a clear gap (no extinction: its modes sit on the imaginary axis), a glass slab, a
+    # thick dense diffuser and a strongly forward-scattering layer: finite, and without
+    # absorption reflectance + transmittance = 1 at k = 0
+    clear_glass = [Layer(mua=0.0, mus=0.0, n=1.5, thickness=1.0)]
+    res = stack.responses([clear_glass], 1.0, 1.0, (37.0, 53.0))
+    # two Fresnel surfaces of 4 % with every reflection between them: 2 R / (1 + R)
+    assert np.all(np.isfinite(res.r_all)) and abs(res.r_all[0, 0] - 0.08 / 1.04) < 1e-6
+    for layers in ([Layer(0.0, 10.0, 0.9, 1.5, 0.5), Layer(0.0, 0.0, 0.0, 1.0, 0.2),
+                    Layer(0.0, 10.0, 0.9, 1.5, 0.5)],
+                   [Layer(0.0, 100.0, 0.0, 1.5, 50.0)], [Layer(0.0, 20.0, 0.99, 1.5, 1.0)]):
+        res = stack.responses([layers], 1.0, 1.0, (37.0, 53.0))
+        assert np.all(np.isfinite(res.r_all)) and np.all(np.isfinite(res.r_cone))
+        assert abs(res.r_all[0, 0] + res.into_backing[0, 0] - 1) < 1e-4, layers

@@ -82,6 +82,10 @@ def coupling(modes: int) -> np.ndarray:
     return c
 
 
+#: the smallest extinction a layer is solved with [1/mm] (see _eigen): over a 10 mm path
+#: it changes a reading by 1e-5 of itself
+MIN_EXTINCTION = 1e-6
+
 # operators kept while reading several specimens that share layers (:func:`reuse`): a
 # design's nodes repeat each material and each thickness. Per thread: bands are solved in
 # chunks on several threads, each with its own
@@ -135,7 +139,9 @@ def _eigen(optics, n: float, nodes: Nodes, ks: np.ndarray, modes: int):
     f = chi[:, order]
     kern = kernels((chi[:, :order] - f[:, None]) / (1 - f[:, None]), mu, w, modes)
     mus_s = mus * (1 - f)
-    mut = mua + mus_s
+    # a clear layer (no extinction) has modes on the imaginary axis, whose sign the
+    # eigenvalue's square root cannot tell: a floor far below any reading's resolution
+    mut = np.maximum(mua + mus_s, MIN_EXTINCTION)
     size = modes * nn
     bands = len(mua)
     within = np.zeros((bands, size, size))
