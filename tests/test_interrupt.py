@@ -24,6 +24,9 @@ LONG_RUNS = {
                            "--integrator", "vpm", "--hero-camera", "--bands", "450,540,605",
                            "--spp", "100000", "--resolution", "64x48",
                            "--volume-photons", "200000"],
+    # the layered solver's threads (41 bands of a two-layer stack, many seconds of solve)
+    "shade-layered": [DENTALUX, "shade", "--layer", "enamel:0.6", "--layer", "dentin:0.9",
+                      "--substrate", "none", "--bands", "full:2", "--solver", "layered"],
 }
 
 

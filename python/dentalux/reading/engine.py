@@ -21,6 +21,7 @@ Every command that reads a specimen (``shade``, ``design``'s nodes and verificat
 from __future__ import annotations
 
 import os
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 
@@ -180,6 +181,8 @@ def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int,
     chunks = [(indices, entries, lo) for indices, entries in by_indices.items()
               for lo in range(0, max(len(m) for _, m in entries), LAYERED_CHUNK)]
 
+    stop = threading.Event()  # set on Ctrl-C: the running chunks end at their next step
+
     def solve(chunk) -> int:
         indices, entries, lo = chunk
         first = float(_core.fresnel_reflectance([1.0], 1.0, indices[0])[0])
@@ -187,10 +190,10 @@ def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int,
         with layered.reuse():
             for spec_i, members in entries:
                 idx = members[lo:lo + LAYERED_CHUNK]
-                if not idx:
+                if not idx or stop.is_set():
                     continue
                 group = [specimens[spec_i][i] for i in idx]
-                res = layered.responses(group, 1.0, n_below, cone)
+                res = layered.responses(group, 1.0, n_below, cone, stop=stop.is_set)
                 local = layered.local_parts(group, 1.0, n_below)
                 outs[spec_i][idx] = layered.order_sums(res, local, first, (a0, a), (b0, b),
                                                        MAX_ORDER, WINDOW_KEYS)
@@ -201,12 +204,21 @@ def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int,
     # BLAS's own threads on matrices of this size spin more than they compute (measured:
     # 3 CPU-s for an enamel solve with one, 24-64 with BLAS's threads on a loaded machine)
     workers = min(len(chunks), threads or os.cpu_count() or 1)
-    with threadpool_limits(limits=1, user_api="blas"), \
-            ThreadPoolExecutor(max_workers=max(workers, 1)) as pool:
-        for count in pool.map(solve, chunks):
-            done += count
-            if cb:
-                cb(done)
+    pool = ThreadPoolExecutor(max_workers=max(workers, 1))
+    with threadpool_limits(limits=1, user_api="blas"):
+        futures = [pool.submit(solve, chunk) for chunk in chunks]
+        try:
+            for fut in futures:
+                done += fut.result()
+                if cb:
+                    cb(done)
+        finally:
+            # on Ctrl-C (or an error) the chunks not started are dropped and the running
+            # ones stop at their next spatial frequency group
+            stop.set()
+            for fut in futures:
+                fut.cancel()
+            pool.shutdown(wait=True)
     return outs
 
 

@@ -110,16 +110,23 @@ def modes_for(k: float) -> int:
     return next(m for k_max, m in MODES_BY_K if k <= k_max)
 
 
+class Stopped(Exception):
+    """Raised by :func:`responses` when its ``stop()`` says so (Ctrl-C elsewhere)."""
+
+
 def responses(band_stacks, n_above: float, n_below: float, cone_deg, ks=K_NODES,
-              **settings) -> Response:
+              stop=None, **settings) -> Response:
     """:func:`response` at every spatial frequency of ``ks``, each with the modes it needs,
-    solved in groups of equal modes."""
+    solved in groups of equal modes; ``stop()``, asked before each group, ends it early
+    (:class:`Stopped`)."""
     ks = np.asarray(ks, float)
     groups: dict[int, list[int]] = {}
     for i, k in enumerate(ks):
         groups.setdefault(modes_for(k), []).append(i)
     out = {f: np.zeros((len(band_stacks), len(ks))) for f in FIELDS}
     for modes, idx in groups.items():
+        if stop is not None and stop():
+            raise Stopped
         res = response(band_stacks, ks[idx], n_above, n_below, cone_deg, modes, **settings)
         for f in FIELDS:
             out[f][:, idx] = getattr(res, f)
