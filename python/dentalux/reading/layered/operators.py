@@ -88,8 +88,10 @@ MIN_EXTINCTION = 1e-6
 
 # operators kept while reading several specimens that share layers (:func:`reuse`): a
 # design's nodes repeat each material and each thickness. Per thread: bands are solved in
-# chunks on several threads, each with its own
+# chunks on several threads, each with its own. At most KEEP of them (up to about 15 MB
+# each for a chunk of 4 bands), the least recently used dropped first
 _LOCAL = threading.local()
+KEEP = 32
 
 
 @contextmanager
@@ -108,13 +110,16 @@ def reuse():
 
 
 def kept(key, make):
-    """``make()``, or its kept value under ``key`` inside :func:`reuse`."""
+    """``make()``, or its kept value under ``key`` inside :func:`reuse` (the KEEP most
+    recently used are kept)."""
     store = getattr(_LOCAL, "kept", None)
     if store is None:
         return make()
-    if key not in store:
-        store[key] = make()
-    return store[key]
+    value = store.pop(key) if key in store else make()
+    store[key] = value
+    while len(store) > KEEP:
+        store.pop(next(iter(store)))
+    return value
 
 
 def layer(optics, thickness: float, n: float, nodes: Nodes, ks, modes: int
