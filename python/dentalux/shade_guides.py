@@ -1,7 +1,8 @@
 """Shade guides: the CIELAB of each tab of a guide, as far as published values were found.
 
-The table is ``data/shade_guides.csv`` (one row per tab: guide, tab, L, a, b, the instrument
-and geometry of the measurement, citation, doi, status, notes). A tab whose L*, a*, b* were
+The table is ``data/shade_guides.csv`` (one row per tab: guide, tab, L, a, b, the illuminant
+and observer of L, a, b where the source states them, the instrument and geometry of the
+measurement, citation, doi, status, notes). A tab whose L*, a*, b* were
 not found in any readable source has empty values and status ``not-found``
 (docs/literature-dental.md says what was searched); :func:`lab` refuses such a tab rather
 than guess. Guide names are the table's first column; a guide name with an ``@source``
@@ -53,12 +54,15 @@ class Tab:
     instrument: str
     geometry: str
     notes: str
+    illuminant: str = ""  # of L*, a*, b*; empty where the source does not say
+    observer: str = ""
 
     def source(self) -> dict:
         """Where the values came from, for a JSON report."""
         return {"guide": self.guide, "tab": self.tab, "status": self.status,
                 "citation": self.citation, "doi": self.doi, "instrument": self.instrument,
-                "geometry": self.geometry, "notes": self.notes}
+                "geometry": self.geometry, "illuminant": self.illuminant,
+                "observer": self.observer, "notes": self.notes}
 
 
 def _float(text: str) -> float | None:
@@ -82,7 +86,9 @@ def _table() -> dict[str, dict[str, Tab]]:
                       doi=(row.get("doi") or "").strip(),
                       instrument=(row.get("instrument") or "").strip(),
                       geometry=(row.get("geometry") or "").strip(),
-                      notes=(row.get("notes") or "").strip())
+                      notes=(row.get("notes") or "").strip(),
+                      illuminant=(row.get("illuminant") or "").strip(),
+                      observer=(row.get("observer") or "").strip())
             out.setdefault(tab.guide, {})[tab.tab] = tab
     return out
 
@@ -168,7 +174,7 @@ def read_guide_file(path, guide: str | None = None) -> dict[str, Tab]:
         out[tab_name] = Tab(
             guide=name, tab=tab_name, lab=lab_v, status="measured",
             citation=meta["source"] or f"the lab's own guide ({p.name})", doi="",
-            instrument=meta["instrument"], geometry="",
+            instrument=meta["instrument"], geometry="", illuminant=ill, observer=obs,
             notes=f"imported from {p.name}; illuminant {ill}, observer {obs}"
                   + (f", read {meta['date']}" if meta["date"] else ""))
     return out
@@ -218,9 +224,12 @@ def instruments_of(guide: str) -> list[str]:
     return sorted({t.instrument for t in _guide(guide).values() if t.instrument})
 
 
-def instrument_note(guide: str, inst, key: str = "shade_match_instrument") -> dict:
+def instrument_note(guide: str, inst, key: str = "shade_match_instrument",
+                    illuminant=None, observer=None) -> dict:
     """``shade_match_instrument``: the guide's instrument against the reading's, and a note
-    when they differ (or the guide names none)."""
+    when they differ (or the guide names none). Given the reading's ``illuminant`` and
+    ``observer``, also ``guide_illuminant`` and a note when the tabs' L*a*b* are for another
+    illuminant or observer (ΔE00 across two whites means little)."""
     name = getattr(inst, "name", str(inst))
     theirs = instruments_of(guide)
     same = theirs == [name]
@@ -232,8 +241,19 @@ def instrument_note(guide: str, inst, key: str = "shade_match_instrument") -> di
     else:
         note = (f"the guide was read with {', '.join(theirs)}, the reading with {name}: "
                 "another instrument or geometry reads the same tab differently")
-    return {key: {"guide": guide, "guide_instrument": theirs, "reading_instrument": name,
-                  "same": same, "note": note}}
+    out = {"guide": guide, "guide_instrument": theirs, "reading_instrument": name,
+           "same": same, "note": note}
+    if illuminant is not None:
+        mine = f"{getattr(illuminant, 'value', illuminant)}/{getattr(observer, 'value', observer)}"
+        lit = sorted({f"{t.illuminant}/{t.observer or '?'}" for t in _guide(guide).values()
+                      if t.illuminant and t.lab is not None})
+        out["guide_illuminant"] = lit
+        if lit and lit != [mine]:
+            out["note"] = "; ".join(x for x in (note, (
+                f"the guide's L*a*b* are for {', '.join(lit)} (illuminant/observer), the "
+                f"reading's for {mine}: read under the guide's illuminant and observer "
+                "before comparing")) if x)
+    return {key: out}
 
 
 def guides() -> list[str]:

@@ -30,8 +30,8 @@ def shade_command(
     backing_white: mo.BackingWhite = None,
     contact: mo.Contact = None,
     match: str = typer.Option(None, help="report the nearest tabs of a shade guide: "
-                              "vita-classical | vita-3d-master | an imported guide "
-                              "(`dentalux guides list`) | a guide FILE.csv"),
+                              "bioform | vita-classical | vita-3d-master | an imported "
+                              "guide (`dentalux guides list`) | a guide FILE.csv"),
     layer: list[str] = typer.Option(None, help="MATERIAL:THICKNESS, repeated top to bottom: "
                                     "a layered specimen instead of MATERIAL"),
     substrate: str = typer.Option(None, help="substrate under the --layer stack "
@@ -80,7 +80,8 @@ def shade_command(
                        specimen=specimen, **kw)
     check_finite(out, "shade")  # a NaN or inf reading is an error, never printed
     if match:
-        out.update(shade_guides.instrument_note(match, inst))
+        out.update(shade_guides.instrument_note(match, inst, illuminant=illuminant,
+                                                observer=observer))
     if readings_out:
         total = sum(t for _, t in specimen) if specimen else thickness
         readings.write(readings_out, out, total, comment=readings.comment_from_shade(
