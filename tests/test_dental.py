@@ -10,8 +10,11 @@ import pytest
 from dentalux import color, dental
 
 # the laterally infinite disc over infinite areas: the geometry of the closed forms and of
-# the adding formula these tests check (the API's default is the default instrument)
-metrics_infinite = functools.partial(dental.metrics, instrument="infinite")
+# the adding formula these tests check (the API's default is the default instrument), read
+# by the slab walks (the default solver there is the layered one: tests/test_layered.py and
+# the last test here)
+metrics_infinite = functools.partial(dental.metrics, instrument="infinite",
+                                     solver="monte-carlo")
 
 
 @dataclass
@@ -250,3 +253,21 @@ def test_material_from_a_file_with_several_materials(tmp_path):
         dental.metrics(f"{path}:nope", 1.0, bands="paper")
     m = metrics_infinite(f"{path}:toy2", 1.0, bands="paper", photons=2_000)
     assert m.material == "toy2" and m.tp > 0
+
+
+def test_the_default_solver_meets_the_closed_forms_within_its_accuracy():
+    """The infinite geometry by the default (layered) solver: a clear disc's R1, T1, R2, T2
+    against the closed forms within the solver's stated accuracy, and an opaque disc's TP 0
+    and CR 1 (no noise: nothing to average)."""
+    from dentalux.reading.layered.stack import ACCURACY
+
+    bands = np.array([450.0, 550.0, 650.0])
+    mat = ToyMaterial("glass", mua=0.6, mus=0.0)
+    m = dental.metrics(mat, 1.0, bands=bands, instrument="infinite")
+    assert m.method == "layered"
+    cf = _clear_disc_closed_form(0.6, 1.5, 1.0)
+    for key, want in zip(("r1", "t1", "r2", "t2"), cf, strict=True):
+        assert np.all(np.abs(np.array(m.spectra[key]) - want) <= ACCURACY * want), key
+    opaque = dental.metrics(ToyMaterial("opaque", mua=1.0, mus=60.0), 3.0, bands="paper",
+                            instrument="infinite")
+    assert opaque.tp < 1e-6 and opaque.cr == pytest.approx(1.0, abs=1e-9)

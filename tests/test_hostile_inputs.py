@@ -392,10 +392,17 @@ def test_a_non_finite_result_is_an_error_naming_the_key(bad, key):
 def test_an_absurd_material_is_an_error_not_null(tmp_path, capsys):
     path = tmp_path / "opaque.toml"
     path.write_text(tomli_w.dumps({"materials": {"x": _material(mua=[1e6] * 3)}}))
-    # a pure absorber read 0-45 (specular excluded): Y = 0 over both backings, CR = 0/0
+    # a pure absorber read 0-45 (specular excluded) by the walks: no photon comes back, Y = 0
+    # over both backings and CR = 0/0
     code, out, err = run(capsys, ["shade", path, "--bands", "450,550", "--photons", "200",
-                                  "--json"])
+                                  "--solver", "monte-carlo", "--json"])
     assert code == 2 and out == "" and "the result's" in err, (out, err)
+    # the layered solver keeps the light scattered once before it is absorbed (albedo about
+    # 1e-6): a finite, black, opaque reading, the same over both backings
+    code, out, err = run(capsys, ["shade", path, "--bands", "450,550", "--json"])
+    assert code == 0, err
+    got = json.loads(out)
+    assert got["lab_white"][0] < 0.01 and got["cr"] == pytest.approx(1.0, abs=1e-6)
 
 
 # ---------------------------------------------------------------------------------------

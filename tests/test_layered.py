@@ -115,6 +115,11 @@ def test_a_finite_specimen_reads_as_the_monte_carlo_reads_it():
         solved.values, mc.values, se)
     # the correction's noise is the reading's only noise, far below the walk's own
     assert np.all(solved.stderr < mc.stderr)
+    # the light lost outside the window and at the rim: the rim's part is the past-rim
+    # walk's first crossings (binomial noise of each run's photons bounds the spread)
+    e_mc, e_la = mc.edge_loss, solved.edge_loss
+    se = np.hypot(np.sqrt(e_mc * (1 - e_mc) / 200_000), np.sqrt(e_la * (1 - e_la) / 20_000))
+    assert np.all(np.abs(e_la - e_mc) < 4 * se + stack.ACCURACY * e_mc), (e_la, e_mc)
 
 
 def test_the_layered_reading_states_an_honest_standard_error():

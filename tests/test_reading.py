@@ -24,7 +24,7 @@ def _engine(inst, rb_black, rb_white, photons, seed, bands=BANDS):
     wl = resolve_bands(bands)
     mats = [(dental._resolve_material(m), t) for m, t in STACK]
     return reading.measure(reading.stacks(mats, wl), wl, inst, np.full(len(wl), rb_black),
-                           np.full(len(wl), rb_white), photons, seed)
+                           np.full(len(wl), rb_white), photons, seed, solver="monte-carlo")
 
 
 @pytest.mark.parametrize("preset", ["contact-probe-3mm", "45-0"])

@@ -245,7 +245,7 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
          estimator: str = "weighted", illuminant: str = "D65", observer: str = "2",
          op_backing: str = "black", reconstruction: str = "hold", threads: int | None = None,
          progress: bool | None = False, precision: float | None = None,
-         walks: str = "per-band", solver: str = "monte-carlo") -> DentalMetrics:
+         walks: str = "per-band", solver: str = reading.DEFAULT_SOLVER) -> DentalMetrics:
     """Colour metrics of a layered specimen as ``instrument`` reads it (see module doc).
 
     ``specimen``: a list of (material, thickness [mm]) from top to bottom; a material is a
@@ -413,7 +413,7 @@ def metrics(material, thickness: float, bands=DEFAULT_BANDS, backing_black=None,
             estimator: str = "weighted", illuminant: str = "D65", observer: str = "2",
             op_backing: str = "black", reconstruction: str = "hold", threads: int | None = None,
             progress: bool | None = False, instrument=None,
-            precision: float | None = None, solver: str = "monte-carlo") -> DentalMetrics:
+            precision: float | None = None, solver: str = reading.DEFAULT_SOLVER) -> DentalMetrics:
     """Colour metrics of a ``thickness`` [mm] disc of ``material`` (see module doc).
 
     ``material``: a Material (anything with ``.at(l)`` giving mua, mus, g, fd, n), a library

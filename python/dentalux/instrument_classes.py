@@ -14,6 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from dentalux import inputs, instrument, natural_teeth
+from dentalux.reading import DEFAULT_SOLVER
 
 DATA = Path(__file__).parent / "data" / "instrument_classes.toml"
 #: quick defaults of the command (the reading's s.e. is well below the SDs, about 1 L*)
@@ -62,7 +63,7 @@ def check(lab, published: dict) -> list[bool]:
 
 
 def validate(photons: int = PHOTONS, bands=BANDS, seed: int = 1, threads=None,
-             presets=None, solver: str = "monte-carlo") -> dict:
+             presets=None, solver: str = DEFAULT_SOLVER) -> dict:
     """``{"presets": [{name, class, reading: {lab}, published: {mean, sd, sources}, inside}]}``
     for every preset whose class has published natural-tooth readings. ``presets`` (names)
     restricts the list (None: every preset); ``solver`` as :func:`dentalux.dental.read`'s."""

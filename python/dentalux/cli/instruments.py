@@ -7,6 +7,7 @@ from rich.console import Console
 from rich.table import Table
 
 from dentalux import instrument
+from dentalux.reading import DEFAULT_SOLVER
 from dentalux.strict_json import dumps_checked
 
 app = typer.Typer(help="Instrument presets: lit spot, window, geometry, backings, contact.",
@@ -56,7 +57,7 @@ def validate_command(
     bands: str = typer.Option(None, help="comma-separated wavelengths [nm] (default "
                               "450,500,550,600,650)"),
     seed: int = typer.Option(1, help="random seed"),
-    solver: str = typer.Option("monte-carlo", help="monte-carlo | layered | auto (as "
+    solver: str = typer.Option(DEFAULT_SOLVER, help="monte-carlo | layered | auto (as "
                                "`dentalux shade --solver`; layered refuses the d/8 presets)"),
 ) -> None:
     """The natural incisor read by every preset beside its class's published readings."""

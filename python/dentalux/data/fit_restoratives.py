@@ -122,7 +122,7 @@ STATED_RESIDUAL = {
     "resin-composite@cerasmart-ht": {"tp": 0.05, "cr": 0.002},
     # a grey model cannot give the chroma difference part of this shaded disc's TP
     "resin-composite@avencia-op": {"tp": 2.4, "cr": 0.012},
-    "lithium-disilicate@emax-ht": {"tp": 0.3},
+    "lithium-disilicate@emax-ht": {"tp": 0.05},
     "zirconia@zeno-iadr2010": {"cr": 0.002},
     "zirconia@tuncel-framework": {"cr": 0.002},
     "zirconia@tuncel-monolithic": {"cr": 0.002},

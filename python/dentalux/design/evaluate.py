@@ -27,6 +27,7 @@ import numpy as np
 from dentalux import dental
 from dentalux import instrument as instruments
 from dentalux.design import constraints, substrates, targets, verify
+from dentalux.reading import DEFAULT_SOLVER
 
 #: the seed offset of the candidates' reads (the verification's: seed + 1)
 SEED_OFFSET = 1
@@ -132,7 +133,7 @@ def evaluate(target, layers, candidates, total=None, substrate: str = "dentin", 
              precision: float | None = None, illuminant: str = "D65", observer: str = "2",
              reconstruction: str = "hold", estimator: str = "weighted",
              threads: int | None = None, progress: bool | None = False,
-             solver: str = "monte-carlo") -> EvaluationResult:
+             solver: str = DEFAULT_SOLVER) -> EvaluationResult:
     """Read each of ``candidates`` (thicknesses [mm] top to bottom, or ``"T1/T2,..."``) of
     ``layers`` on ``substrate`` and rank them by ΔE00 to ``target`` (module doc). The
     arguments are :func:`dentalux.design.optimise`'s; ``precision`` (a standard error in

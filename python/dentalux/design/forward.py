@@ -90,7 +90,7 @@ class Surface:
     def __init__(self, parts, ranges, tail, inst, wl, rb_white, rb_black, colour: ColourMap,
                  photons: int, seed: int, black: bool, nodes: int | None = None,
                  estimator: str = "weighted", threads: int | None = None, progress=None,
-                 solver: str = "monte-carlo"):
+                 solver: str = reading.DEFAULT_SOLVER):
         k = len(parts)
         n = int(nodes or DEFAULT_NODES[k])
         if n < 2:

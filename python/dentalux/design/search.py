@@ -170,7 +170,7 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
              spacing: float = TOLERANCE_MM, check: bool = True, illuminant: str = "D65",
              observer: str = "2", reconstruction: str = "hold", estimator: str = "weighted",
              threads: int | None = None, progress: bool | None = False,
-             precision: float | None = None, solver: str = "monte-carlo") -> DesignResult:
+             precision: float | None = None, solver: str = reading.DEFAULT_SOLVER) -> DesignResult:
     """Search layer thicknesses that match ``target`` read through ``instrument``.
 
     ``target``: ``lab:L,a,b``, ``GUIDE:TAB`` (data/shade_guides.csv), ``stack:MAT:MM/...``,

@@ -53,6 +53,9 @@ WALKS = ("per-band", "shared")
 #: deterministic solver of dentalux.reading.layered, with a Monte Carlo walk for what the
 #: specimen's rim takes), or 'auto' (layered where it holds, else monte-carlo)
 SOLVERS = ("monte-carlo", "layered", "auto")
+#: the solver of every reading unless one is named: the layered solver wherever the beam is
+#: along the normal (its only noise is the rim's walk), the walks elsewhere
+DEFAULT_SOLVER = "auto"
 # bands solved together by the layered solver, one chunk per thread (a design's kept
 # operators take up to about 50 MB per band of a chunk)
 LAYERED_CHUNK = 4
@@ -69,6 +72,15 @@ def stacks(parts, wl) -> list[list[Layer]]:
                                thickness=float(t), fd=float(o.fd)))
         out.append(stack)
     return out
+
+
+def by_indices(band_stacks) -> dict[tuple, list[int]]:
+    """The bands of ``band_stacks`` grouped by their layers' refractive indices: the layered
+    solver's nodes follow the indices, so a group is solved together."""
+    groups: dict[tuple, list[int]] = {}
+    for i, stack in enumerate(band_stacks):
+        groups.setdefault(tuple(lay.n for lay in stack), []).append(i)
+    return groups
 
 
 def _tuples(band_stacks) -> list[list[tuple]]:
@@ -171,14 +183,11 @@ def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int,
 
     a0, a, b0, b, _, _, cone = inst.window(0.0)
     outs = [np.zeros((len(bs), MAX_ORDER + 1, len(WINDOW_KEYS))) for bs in specimens]
-    groups: dict[tuple, list[int]] = {}
+    groups: dict[tuple, list[tuple[int, list[int]]]] = {}
     for spec_i, bs in enumerate(specimens):
-        for i, stack in enumerate(bs):
-            groups.setdefault((spec_i, tuple(lay.n for lay in stack)), []).append(i)
-    by_indices: dict[tuple, list[tuple[int, list[int]]]] = {}
-    for (spec_i, indices), members in groups.items():
-        by_indices.setdefault(indices, []).append((spec_i, members))
-    chunks = [(indices, entries, lo) for indices, entries in by_indices.items()
+        for indices, members in by_indices(bs).items():
+            groups.setdefault(indices, []).append((spec_i, members))
+    chunks = [(indices, entries, lo) for indices, entries in groups.items()
               for lo in range(0, max(len(m) for _, m in entries), LAYERED_CHUNK)]
 
     stop = threading.Event()  # set on Ctrl-C: the running chunks end at their next step
@@ -417,10 +426,7 @@ def infinite_solved(band_stacks, rb_black, rb_white, contact: float | None = Non
     start_cpu, start = time.process_time(), time.perf_counter()
     n_below = 1.0 if contact is None else float(contact)
     vals = np.zeros((5, len(band_stacks)))
-    groups: dict[tuple, list[int]] = {}
-    for i, stack in enumerate(band_stacks):
-        groups.setdefault(tuple(lay.n for lay in stack), []).append(i)
-    for members in groups.values():
+    for members in by_indices(band_stacks).values():
         group = [band_stacks[i] for i in members]
         with threadpool_limits(limits=1, user_api="blas"):
             res = layered.responses(group, 1.0, n_below, None, ks=(0.0,))
@@ -442,7 +448,8 @@ def infinite_solved(band_stacks, rb_black, rb_white, contact: float | None = Non
         cpu_seconds=time.process_time() - start_cpu, method="layered", inputs=vals,
         inputs_stderr=np.zeros_like(vals), combine=combine,
         extra={"seconds": time.perf_counter() - start,
-               **{k: vals[i] for i, k in enumerate(ADDING_INPUTS)}})
+               **{k: vals[i] for i, k in enumerate(ADDING_INPUTS)},
+               **{f"{k}_stderr": np.zeros_like(vals[i]) for i, k in enumerate(ADDING_INPUTS)}})
 
 
 def use_layered(inst, solver: str) -> bool:
@@ -460,7 +467,7 @@ def use_layered(inst, solver: str) -> bool:
 
 def measure_many(specimens, wl, inst, rb_black, rb_white, photons: int, seed: int,
                  estimator: str = "weighted", threads=None, progress=False,
-                 solver: str = "monte-carlo") -> list[ReadSpectra]:
+                 solver: str = DEFAULT_SOLVER) -> list[ReadSpectra]:
     """:func:`measure` of several specimens (a design's nodes) with the same seed; the
     layered solver solves them together, each layer and thickness once."""
     shared_cpu = 0.0
@@ -487,15 +494,21 @@ def measure_many(specimens, wl, inst, rb_black, rb_white, photons: int, seed: in
 
 def measure(band_stacks, wl, inst, rb_black, rb_white, photons: int, seed: int,
             estimator: str = "weighted", threads=None, progress=False,
-            walks: str = "per-band", solver: str = "monte-carlo") -> ReadSpectra:
+            walks: str = "per-band", solver: str = DEFAULT_SOLVER) -> ReadSpectra:
     """The readings of one stack per band (``band_stacks``, top layer first) at the bands
     ``wl`` [nm] through ``inst`` with backing reflectances ``rb_black``, ``rb_white`` per
     band (module doc). ``walks``: 'per-band' or 'shared' (instrument windows only);
-    ``solver``: one of SOLVERS (the layered solver ignores ``walks``)."""
+    ``solver``: one of SOLVERS ('auto' with shared walks reads by the walks)."""
     if walks not in WALKS:
         raise ValueError(f"walks = {walks!r}: allowed {', '.join(WALKS)}")
     contact = inst.contact_index
-    if use_layered(inst, solver):
+    layered = use_layered(inst, solver)
+    if walks == "shared" and layered:
+        # shared walks are a Monte Carlo method: 'auto' keeps the walks they name
+        if solver == "layered":
+            raise ValueError("walks = 'shared' needs solver = 'monte-carlo' (or 'auto')")
+        layered = False
+    if layered:
         if inst.is_infinite:
             out = infinite_solved(band_stacks, rb_black, rb_white, contact)
         else:

@@ -777,14 +777,19 @@ impl<'a> Tracer<'a> {
     }
 
     /// Whether the walk at `pos` ends at the specimen's rim: beyond it, its power `w` is
-    /// tallied as lost there; with [`BackingOrders::past_rim_only`] it goes on, marked.
+    /// tallied as lost there; with [`BackingOrders::past_rim_only`] it goes on, marked, and
+    /// its first crossing tallies −`w` (the infinite specimen loses nothing there, the
+    /// finite one `w`: the run estimates infinite − finite).
     #[inline]
     fn ends_at_rim(&self, pos: Vec3, w: f64, ph: &mut Photon, t: &mut Tally) -> bool {
         if pos.x * pos.x + pos.y * pos.y <= self.rim2 {
             return false;
         }
         if self.past_rim_only {
-            t.past_rim = true;
+            if !t.past_rim {
+                t.past_rim = true;
+                self.window_add(instrument::RIM, -w, ph, t);
+            }
             return false;
         }
         self.window_add(instrument::RIM, w, ph, t);

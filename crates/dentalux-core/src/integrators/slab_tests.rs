@@ -475,7 +475,8 @@ fn backing_orders_are_refused_without_a_window_or_out_of_range() {
 fn past_rim_tally_is_the_difference_between_infinite_and_finite_specimens() {
     // a narrow specimen (rim 2 mm around a 1.5 mm window) loses much of a white backing's
     // light at its rim; the past-rim walk estimates what the rim takes, so that infinite −
-    // past-rim reproduces the finite specimen (independent seeds, 4 s.e.)
+    // past-rim reproduces the finite specimen (independent seeds, 4 s.e.): what the window
+    // reads, what leaves outside it and what the rim itself takes
     let orders = |past_rim_only| BackingOrders {
         max_order: 64,
         survival: 0.9,
@@ -490,7 +491,12 @@ fn past_rim_tally_is_the_difference_between_infinite_and_finite_specimens() {
     let finite = run(&with_rim(false, 32));
     let past = run(&with_rim(true, 33));
     for rb in [0.0, 0.9] {
-        for key in [instrument::VIEWED_R, instrument::VIEWED_T] {
+        for key in [
+            instrument::VIEWED_R,
+            instrument::VIEWED_T,
+            instrument::OUTSIDE_R,
+            instrument::RIM,
+        ] {
             let (vi, si) = polynomial(&infinite, 65, key, rb);
             let (vf, sf) = polynomial(&finite, 65, key, rb);
             let (vp, sp) = polynomial(&past, 65, key, rb);

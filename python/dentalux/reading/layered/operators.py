@@ -163,7 +163,10 @@ def _eigen(optics, n: float, nodes: Nodes, ks: np.ndarray, modes: int):
     lam, v = np.linalg.eig(apb @ (a - b))
     kappa = np.sqrt(lam.astype(complex))
     kappa = np.where(kappa.real < 0, -kappa, kappa)
-    p = v + np.linalg.solve(apb.astype(complex), v * kappa[..., None, :])
+    # (A + B) is real: one real inverse for the real and imaginary parts of v kappa
+    rhs = v * kappa[..., None, :]
+    inv_apb = np.linalg.inv(apb)
+    p = v + (inv_apb @ rhs.real + 1j * (inv_apb @ rhs.imag))
     q = 2 * v - p
     pinv = np.linalg.inv(p)
     return p, pinv, pinv @ q, kappa
@@ -175,9 +178,9 @@ def _slab(eig, thickness: float) -> tuple[np.ndarray, np.ndarray]:
     e = np.exp(-kappa * thickness)[..., None, :]  # right-multiplying by diag(E)
     xe = x * e
     eye = np.eye(x.shape[-1])
-    inner = np.linalg.inv(eye - xe @ xe) @ pinv
-    r = p @ (x - np.swapaxes(e, -1, -2) * xe) @ inner
-    t = p @ (eye * e - x @ xe) @ inner
+    inner = np.linalg.solve(eye - xe @ xe, pinv)
+    r = p @ ((x - np.swapaxes(e, -1, -2) * xe) @ inner)
+    t = p @ ((eye * e - x @ xe) @ inner)
     return r.real, t.real
 
 
@@ -211,7 +214,7 @@ def interface(n1: float, n2: float, nodes: Nodes, modes: int) -> Element:
 def add(a: Element, b: Element) -> Element:
     """``a`` above ``b``, with every order of reflection between them."""
     eye = np.eye(a.ru.shape[-1])
-    x1 = np.linalg.inv(eye - a.ru @ b.rd)
-    x2 = np.linalg.inv(eye - b.rd @ a.ru)
-    return Element(rd=a.rd + a.tu @ b.rd @ x1 @ a.td, td=b.td @ x1 @ a.td,
-                   ru=b.ru + b.td @ a.ru @ x2 @ b.tu, tu=a.tu @ x2 @ b.tu)
+    down = np.linalg.solve(eye - a.ru @ b.rd, a.td)  # every order of a's light into b
+    up = np.linalg.solve(eye - b.rd @ a.ru, b.tu)    # and of b's light into a
+    return Element(rd=a.rd + a.tu @ (b.rd @ down), td=b.td @ down,
+                   ru=b.ru + b.td @ (a.ru @ up), tu=a.tu @ up)
