@@ -511,6 +511,6 @@ def measure(band_stacks, wl, inst, rb_black, rb_white, photons: int, seed: int,
         from dentalux.reading import white_reference
 
         out = white_reference.calibrate(out, wl, inst, rb_black, photons, seed, estimator,
-                                        threads)
+                                        threads, solver)
     out.wavelengths_nm = np.asarray(wl, dtype=float)
     return out
