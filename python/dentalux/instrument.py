@@ -9,7 +9,9 @@ uniformly over the lit disc, the backing lies under the specimen, and light is r
 where it leaves inside the window. Light that leaves elsewhere is the edge loss. The lit
 region and the window may be rings (``illuminated_inner_diameter_mm``,
 ``viewed_inner_diameter_mm``): a fibre-optic probe's illuminating ring around a central
-receiving bundle, or the reverse (docs/instruments.md, "A fibre-optic probe").
+receiving bundle, or the reverse (docs/instruments.md, "A fibre-optic probe"). An optional
+``white_reference`` names the instrument's calibration tile, read through the same window, by
+which readings are divided instead of an ideal white (:mod:`dentalux.white_reference`).
 
 Geometries, each simulated in its reciprocal form (same reading for a reciprocal specimen,
 far fewer photons for a narrow detector):
