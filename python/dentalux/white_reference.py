@@ -77,7 +77,8 @@ class WhiteReference:
 
 
 def _material(value, key: str, base: Path | None):
-    """A library material name or a TOML file (relative to ``base``) -> Material."""
+    """A library material name or a TOML file (relative to ``base``) -> (the name or the
+    file's resolved path, Material): two files of one name in two folders stay apart."""
     from dentalux import materials
 
     text = inputs.text(value, key)
@@ -87,9 +88,9 @@ def _material(value, key: str, base: Path | None):
             path = base / path
         if not path.is_file():
             raise ValueError(f"{key} = {text!r}: material file not found ({path})")
-        text = str(path)
+        text = str(path.resolve())
     try:
-        return materials.get(text)
+        return text, materials.get(text)
     except (ValueError, FileNotFoundError) as exc:
         raise ValueError(f"{key}: {exc}") from None
 
@@ -122,8 +123,7 @@ def parse(table, key: str, base: Path | None = None) -> WhiteReference:
         refl = inputs.number(refl, f"{key}.reflectance", 0.0, 1.0, lo_open=True)
     material = resolved = coefficients = None
     if "material" in table:
-        material = inputs.text(table["material"], f"{key}.material")
-        resolved = _material(material, f"{key}.material", base)
+        material, resolved = _material(table["material"], f"{key}.material", base)
     else:
         c = {k: table[k] for k in COEFFICIENTS}
         coefficients = (
