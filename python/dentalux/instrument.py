@@ -9,7 +9,9 @@ uniformly over the lit disc, the backing lies under the specimen, and light is r
 where it leaves inside the window. Light that leaves elsewhere is the edge loss. The lit
 region and the window may be rings (``illuminated_inner_diameter_mm``,
 ``viewed_inner_diameter_mm``): a fibre-optic probe's illuminating ring around a central
-receiving bundle, or the reverse (docs/instruments.md, "A fibre-optic probe").
+receiving bundle, or the reverse (docs/instruments.md, "A fibre-optic probe"). An optional
+``white_reference`` names the instrument's calibration tile, read through the same window, by
+which readings are divided instead of an ideal white (:mod:`dentalux.white_reference`).
 
 Geometries, each simulated in its reciprocal form (same reading for a reciprocal specimen,
 far fewer photons for a narrow detector):
@@ -38,6 +40,7 @@ from numbers import Real
 from pathlib import Path
 
 from dentalux import inputs
+from dentalux import white_reference as tiles
 
 DATA = Path(__file__).parent / "data" / "instruments.toml"
 INFINITE = "infinite"
@@ -83,7 +86,7 @@ CLASSES = ("clinical-contact-probe", "benchtop-d8", "noncontact-45-0", "imaging"
            "idealised")
 KEYS = ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm", "backing_black",
         "backing_white", "contact_index", "specimen_diameter_mm",
-        "illuminated_inner_diameter_mm", "viewed_inner_diameter_mm")
+        "illuminated_inner_diameter_mm", "viewed_inner_diameter_mm", "white_reference")
 #: the inner diameters that make the lit region or the window a ring (annulus): 0 is a disc
 INNER_KEYS = ("illuminated_inner_diameter_mm", "viewed_inner_diameter_mm")
 
@@ -167,6 +170,9 @@ class Instrument:
     instrument_class: str = "custom"
     illuminated_inner_diameter_mm: float = 0.0
     viewed_inner_diameter_mm: float = 0.0
+    #: the calibration tile (:class:`dentalux.white_reference.WhiteReference` or its table);
+    #: None divides by an ideal, non-penetrating white as before
+    white_reference: object = None
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name:
@@ -212,8 +218,16 @@ class Instrument:
             raise ValueError(f"description = {self.description!r}: must be a string")
         if not isinstance(self.provenance, dict):
             raise ValueError(f"provenance = {self.provenance!r}: must be a table of strings")
+        if self.white_reference is not None:
+            if infinite:
+                raise ValueError("white_reference: the 'infinite' instrument divides by an "
+                                 "ideal white; name a preset or a TOML file to give a tile")
+            fields["white_reference"] = tiles.parse(self.white_reference,
+                                                              "white_reference")
         for key, value in fields.items():  # store what was checked (floats, not "4.0")
             object.__setattr__(self, key, value)
+        if self.white_reference is not None and self.white_reference.diameter_mm is not None:
+            tiles.instrument_for(self)  # a tile narrower than the window is refused here
 
     @property
     def is_infinite(self) -> bool:
@@ -265,11 +279,11 @@ class Instrument:
     @property
     def white_normalised(self) -> bool:
         """Whether an ideal Lambertian white lit like the specimen sends light through the
-        window, so that the reading is a reflectance factor. A probe whose lit ring and read
-        centre do not overlap has none: its reading is then the fraction of the incident
-        power leaving inside the window (a real probe calibrates on a white reference tile,
-        which dentalux does not model yet)."""
-        return self._white_overlap() > 0.0
+        window, so that the reading is a reflectance factor, or whether a white reference tile
+        is given (the reading is then specimen / tile × the tile's reflectance). A probe whose
+        lit ring and read centre do not overlap has neither without a tile: its reading is
+        then the fraction of the incident power leaving inside the window."""
+        return self.white_reference is not None or self._white_overlap() > 0.0
 
     def _white_overlap(self) -> float:
         """Lit area inside the window over the lit area (rings concentric at the centre)."""
@@ -325,6 +339,10 @@ class Instrument:
                 "illuminated_inner_diameter_mm": self.illuminated_inner_diameter_mm,
                 "viewed_inner_diameter_mm": self.viewed_inner_diameter_mm,
                 "white_normalised": self.white_normalised}),
+            # only with a tile: an instrument without one prints as before
+            **({} if self.white_reference is None else {
+                "white_reference": self.white_reference.to_json(),
+                "white_normalised": True}),
         }
 
     def override(self, **changes) -> Instrument:
@@ -336,7 +354,8 @@ class Instrument:
         bad = sorted(set(changes) - set(KEYS))
         if bad:
             raise ValueError(f"unknown instrument field {bad[0]!r}: allowed {', '.join(KEYS)}")
-        geometric = sorted(set(changes) - {"backing_black", "backing_white", "contact_index"})
+        geometric = sorted(set(changes) - {"backing_black", "backing_white", "contact_index",
+                                           "white_reference"})
         if self.is_infinite and geometric:
             raise ValueError(f"{geometric[0]}: the 'infinite' instrument has no lit spot, window "
                              "or geometry to change; name a preset (dentalux instruments list) "
@@ -389,7 +408,8 @@ def _infinite() -> Instrument:
         instrument_class="idealised")
 
 
-def _from_table(name: str, table: dict, where: str, builtin: bool = False) -> Instrument:
+def _from_table(name: str, table: dict, where: str, builtin: bool = False,
+                base: Path | None = None) -> Instrument:
     key = f"{where}: instruments.{name}"
     if not isinstance(table, dict):
         raise ValueError(f"{key} must be a table of keys")
@@ -416,6 +436,8 @@ def _from_table(name: str, table: dict, where: str, builtin: bool = False) -> In
     for k, v in provenance.items():
         inputs.text(v, f"{key}.provenance.{k}")
     spec = table.get("specimen_diameter_mm")
+    tile = None if "white_reference" not in table else tiles.parse(
+        table["white_reference"], f"{key}.white_reference", base)
     try:
         return Instrument(
             name=name,
@@ -438,6 +460,7 @@ def _from_table(name: str, table: dict, where: str, builtin: bool = False) -> In
             viewed_inner_diameter_mm=_number(
                 f"{key}.viewed_inner_diameter_mm",
                 table.get("viewed_inner_diameter_mm", 0.0), 0.0, False),
+            white_reference=tile,
         )
     except ValueError as exc:
         msg = str(exc)
@@ -451,7 +474,8 @@ def _load(path: Path, builtin: bool = False) -> dict[str, Instrument]:
     tables = doc.get("instruments")
     if not isinstance(tables, dict) or not tables:
         raise ValueError(f"{where}: needs [instruments.NAME] tables")
-    return {name: _from_table(name, t, where, builtin) for name, t in tables.items()}
+    return {name: _from_table(name, t, where, builtin, path.parent)
+            for name, t in tables.items()}
 
 
 def presets() -> dict[str, Instrument]:

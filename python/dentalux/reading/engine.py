@@ -520,5 +520,10 @@ def measure(band_stacks, wl, inst, rb_black, rb_white, photons: int, seed: int,
     else:
         out = windowed(band_stacks, inst, rb_black, rb_white, photons, seed, estimator,
                        threads, progress, contact, walks)
+    if inst.white_reference is not None:  # divide by the instrument's own tile instead
+        from dentalux.reading import white_reference
+
+        out = white_reference.calibrate(out, wl, inst, rb_black, photons, seed, estimator,
+                                        threads, solver)
     out.wavelengths_nm = np.asarray(wl, dtype=float)
     return out
