@@ -52,7 +52,7 @@ def test_an_ideal_white_tile_reproduces_todays_normalisation():
         assert np.all(np.abs(after.stderr[c] / expect - 1) < 0.3), (after.stderr[c], expect)
         assert np.all(after.stderr[c] > before.stderr[c] / t)
     assert np.array_equal(after.values[2], before.values[2])  # transmission: its own reference
-    kw = dict(bands=BANDS, photons=20_000, seed=5)
+    kw = dict(bands=BANDS, photons=20_000, seed=5, solver="monte-carlo")
     m0 = dental.read([("enamel", 1.0)], instrument=plain, **kw)
     m1 = dental.read([("enamel", 1.0)], instrument=tiled, **kw)
     err = m1.error("lab_white")
@@ -69,7 +69,7 @@ def test_a_specimen_identical_to_the_tile_reads_its_certified_reflectance(inst):
     got = spectra(tiled, solver="layered")
     cert = np.interp(BANDS, [400, 700], [0.95, 0.99])
     assert got.values[0] == pytest.approx(cert, rel=1e-12, abs=0)
-    assert np.all(got.stderr[0] == 0.0)
+    assert np.all(got.stderr[0] <= 1e-12)  # no noise: rounding only
 
 
 def test_a_specimen_identical_to_the_tile_reads_1_within_se_by_walks():
