@@ -92,6 +92,17 @@ def test_design_target_from_a_guide_file_says_its_instrument(data, capsys):
     assert doc["target_instrument"]["guide_instrument"] == ["contact-probe-3mm"]
 
 
+def test_design_target_from_a_guide_of_another_illuminant_says_so(capsys):
+    # the built-in Bioform tabs are D65/2° after a chromatic adaptation from illuminant C:
+    # the design (D65/2°) is told the guide's white, and no note is added for it
+    code, out, err = run(capsys, "design", "--target", "bioform:B-65", "--layer",
+                         "enamel:0.5-1.0", "--substrate", "dentin", "--instrument", "45-0",
+                         "--photons", 1000, "--bands", "450,550,650", "--json")
+    assert code == 0, err
+    note = json.loads(out)["target_instrument"]
+    assert note["guide_illuminant"] == ["D65/2"] and "illuminant" not in note["note"]
+
+
 def test_render_match_takes_a_guide_file(data, tmp_path):
     """render --match FILE.csv: each region's nearest tabs of the lab's guide, with the
     instrument the guide was read with (the render's own geometry is another)."""

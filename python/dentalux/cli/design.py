@@ -206,13 +206,20 @@ def _evaluate(target, layer, evaluate, total, substrate, cement, instrument, tar
 def _guide_instrument(res) -> dict:
     """``target_instrument``: a guide target's instrument against the design's (a note
     when they differ); empty for other targets."""
+    from inspect import signature
+
     from dentalux import shade_guides
+    from dentalux.design import search
 
     src = res.target.source or {}
     if src.get("kind") != "shade-guide":
         return {}
+    # the command line reads designs under optimise's own illuminant and observer
+    params = signature(search.optimise).parameters
     return shade_guides.instrument_note(src["guide"], res.instrument["name"],
-                                        key="target_instrument")
+                                        key="target_instrument",
+                                        illuminant=params["illuminant"].default,
+                                        observer=params["observer"].default)
 
 
 def _render_json(report: dict) -> dict:
