@@ -256,3 +256,17 @@ def test_clear_layers_and_extreme_media_solve_to_finite_energy_conserving_number
         res = stack.responses([layers], 1.0, 1.0, (37.0, 53.0))
         assert np.all(np.isfinite(res.r_all)) and np.all(np.isfinite(res.r_cone))
         assert abs(res.r_all[0, 0] + res.into_backing[0, 0] - 1) < 1e-4, layers
+
+
+def test_a_response_that_does_not_spread_reads_the_exact_overlap():
+    # an ideal white at the surface (a film of index 1 on a Lambertian reflector of
+    # reflectance 1): its light leaves where it entered, the response is constant in k,
+    # and through equal discs it reads 1 (the window's tail past the last solved k; read
+    # 0.9935 when the tail was taken to fall as 1/k)
+    wl = np.array([450.0, 550.0])
+    inst = instrument.Instrument(name="discs", geometry="0-d", illuminated_diameter_mm=3.0,
+                                 viewed_diameter_mm=3.0, backing_black=0.0, backing_white=1.0)
+    film = [[Layer(mua=0.0, mus=0.0, g=0.0, n=1.0, thickness=1e-6)] for _ in wl]
+    got = engine.measure(film, wl, inst, np.zeros(2), np.ones(2), 2000, 1, solver="layered")
+    assert np.all(np.abs(got.values[1] - 1.0) < 1e-6), got.values
+    assert np.all(np.abs(got.values[0]) < 1e-12)

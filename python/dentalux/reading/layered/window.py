@@ -25,10 +25,15 @@ from dentalux.reading.layered.stack import Response
 # the k integral: the kernel oscillates with period 2 pi / (largest radius) and falls as
 # k^-2; it is summed on a grid of FINE_PER_PERIOD points per period. Past the last solved k a
 # response keeps its local part (specular reflections and the unscattered beam, constant in
-# k) and its remainder falls as 1/k, taken to TAIL_FACTOR times the last node; the kernel's
-# whole integral is the exact overlap
+# k) and its remainder falls as k^-p, p from the last two nodes within [0, 1] (1: a spreading
+# response; 0: one that does not spread, such as light through a clear film on a Lambertian
+# backing), summed to TAIL_FACTOR times the last node; beyond that the kernel's remaining
+# mass (the exact overlap less the sums) counts with weight 1 - p, so a response constant in
+# k is read with the exact overlap
 FINE_PER_PERIOD = 64
 TAIL_FACTOR = 8.0
+#: the tail exponents tabulated; between them the tail's weight is interpolated
+TAIL_EXPONENTS = np.linspace(0.0, 1.0, 5)
 # the responses are splined in asinh(k / K_SCALE), which resolves their fall near k = 0
 K_SCALE = 0.05
 
@@ -53,26 +58,40 @@ def overlap(lit, view) -> float:
 
 @lru_cache(maxsize=32)
 def _weights(ks: tuple, lit: tuple, view: tuple) -> tuple[np.ndarray, np.ndarray, float]:
-    """Linear weights of the window's reading: (spline part per node, 1/k tail of the last
-    node's remainder, the overlap that the local part is read with)."""
+    """Linear weights of the window's reading: (spline part per node, the last node's tail
+    weight per exponent of TAIL_EXPONENTS, the overlap that the local part is read with)."""
     k_last = ks[-1]
     step = 2 * np.pi / max(lit[1], view[1]) / FINE_PER_PERIOD
     fine = np.arange(step / 2, k_last, step)
     far = np.arange(k_last + step / 2, TAIL_FACTOR * k_last, step)
     basis = CubicSpline(np.arcsinh(np.asarray(ks) / K_SCALE), np.eye(len(ks)))(
         np.arcsinh(fine / K_SCALE))                                 # (fine, nodes)
-    spline = (disc_kernel(fine, lit, view) * step) @ basis
-    tail = float((k_last / far) @ (disc_kernel(far, lit, view) * step))
-    return spline, tail, overlap(lit, view)
+    near_kernel = disc_kernel(fine, lit, view) * step
+    far_kernel = disc_kernel(far, lit, view) * step
+    spline = near_kernel @ basis
+    beyond = overlap(lit, view) - near_kernel.sum() - far_kernel.sum()
+    tails = np.array([(k_last / far) ** p @ far_kernel + (1 - p) * beyond
+                      for p in TAIL_EXPONENTS])
+    return spline, tails, overlap(lit, view)
+
+
+def tail_exponent(ks, rest: np.ndarray) -> np.ndarray:
+    """How the remainder falls past the last node, k^-p with p in [0, 1] from its last two
+    nodes (1 where they differ in sign or vanish)."""
+    a, b = rest[..., -2], rest[..., -1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = np.log(a / b) / np.log(ks[-1] / ks[-2])
+    return np.where((a * b > 0) & np.isfinite(p), np.clip(p, 0.0, 1.0), 1.0)
 
 
 def integrate(ks, values: np.ndarray, lit, view, local=0.0) -> np.ndarray:
     """The window's reading of responses ``values`` (..., len(ks)) whose part ``local``
     (...) is constant in k (module doc)."""
-    spline, tail, over = _weights(tuple(map(float, ks)), tuple(map(float, lit)),
-                                  tuple(map(float, view)))
+    spline, tails, over = _weights(tuple(map(float, ks)), tuple(map(float, lit)),
+                                   tuple(map(float, view)))
     local = np.asarray(local, float)
     rest = values - local[..., None]
+    tail = np.interp(tail_exponent(np.asarray(ks, float), rest), TAIL_EXPONENTS, tails)
     return rest @ spline + rest[..., -1] * tail + local * over
 
 
