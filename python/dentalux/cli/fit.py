@@ -50,7 +50,7 @@ def write_checked_spectrum(results, out: Path, name: str, **kw) -> None:
 
 
 def _fit_readings(readings_path: Path, instrument_name, g, n, model, photons, seed, out, name,
-                  as_json: bool, solver: str | None) -> None:
+                  as_json: bool, solver: str | None, smooth: float | None) -> None:
     """``fit --readings``: a material from instrument readings (dentalux.inverse.readings_fit)."""
     from dentalux import instrument, materials, readings
     from dentalux.inverse import readings_fit
@@ -74,7 +74,7 @@ def _fit_readings(readings_path: Path, instrument_name, g, n, model, photons, se
     name = name or out.stem
     res = readings_fit.fit(data, inst, g=g, n=n, model=model,
                            photons=photons or readings_fit.DEFAULT_PHOTONS, seed=seed,
-                           solver=solver)
+                           solver=solver, smooth=0.0 if smooth is None else smooth)
     doc = readings_fit.material_doc(res, data, inst, name)
     import tomli_w
 
@@ -137,7 +137,7 @@ def fit_command(
     photons: int = typer.Option(
         None, help=f"photons per Monte Carlo evaluation (mc; 1000 ... "
                    f"{limits.MAX_FIT_PHOTONS:.0e}; default 400 000, with --readings 20 000 "
-                   "per band)"),
+                   "per band, for the layered solver's rim correction where it reads)"),
     seed: int = typer.Option(1, help="random seed of the Monte Carlo evaluations (mc)"),
     table: Path = typer.Option(None, help="CSV: wavelength_nm,tt,tr,n,g,thickness_mm[,fd,...]"),
     out: str = typer.Option(
@@ -150,6 +150,9 @@ def fit_command(
         None, help="with --readings --model mc: how the instrument's readings are computed: "
         "auto (default: the layered solver where the beam is normal, else Monte Carlo) | "
         "layered | monte-carlo"),
+    smooth: float = typer.Option(
+        None, help="with --readings (spectral): weight >= 0 of a second-difference penalty "
+        "on log μa and log μs across the bands (default 0: each band on its own)"),
 ) -> None:
     """Find μa and μs [1/mm] from total transmittance and reflectance of a disc, or
     (--readings) a material from an instrument's readings over black and white."""
@@ -160,12 +163,13 @@ def fit_command(
             raise ValueError(f"--readings reads thickness and backing per row; drop --"
                              f"{', --'.join(given)}")
         _fit_readings(readings_path, instrument_name, g, n, model, photons, seed, out, name,
-                      as_json, solver)
+                      as_json, solver, smooth)
         return
     if instrument_name is not None:
         raise ValueError("--instrument goes with --readings")
-    if solver is not None:
-        raise ValueError("--solver goes with --readings")
+    for flag, value in (("--solver", solver), ("--smooth", smooth)):
+        if value is not None:
+            raise ValueError(f"{flag} goes with --readings")
     photons = 400_000 if photons is None else photons
     if model == "mc":
         limits.check_count(photons, "--photons", limits.MAX_FIT_PHOTONS, lo=1000)

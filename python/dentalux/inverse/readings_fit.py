@@ -1,11 +1,17 @@
 """Fit μa(λ), μs(λ) of a material to a lab's instrument readings (``dentalux fit --readings``).
 
-Two forward models of the same readings (:mod:`dentalux.readings`):
+Two forward models of the same readings (:mod:`dentalux.readings`,
+:mod:`dentalux.inverse.readings_model`):
 
 - ``mc``: the reading engine (:func:`dentalux.dental.read`) through the instrument model,
-  edge loss included. Every evaluation uses the same seed (common random numbers), so the
-  Monte Carlo noise is a fixed, smooth error of the model rather than a jitter that stalls
-  the optimiser; it is reported beside the residuals (``mc_stderr_de00``).
+  edge loss included, with one of its solvers (``solver``, :data:`SOLVERS`): 'auto' (the
+  default) reads with the layered solver wherever the instrument's beam is normal and with
+  the Monte Carlo walks elsewhere (d/8). The layered solver's only noise is its Monte Carlo
+  correction for the disc's rim; the walks' is all of it. Every evaluation uses the same seed
+  (common random numbers), so that noise is a fixed, smooth error of the model rather than a
+  jitter that stalls the optimiser. The model's error (the standard error and, with the
+  layered solver, its stated accuracy ``stack.ACCURACY``) weighs the residuals and is
+  reported beside them (``mc_stderr_de00``).
 - ``km``: Kubelka–Munk with the Saunderson correction, the field's baseline. A disc of
   thickness X on a backing of reflectance R_g has, with a = 1 + K/S, b = sqrt(a² − 1),
   R = (1 − R_g (a − b coth bSX)) / (a − R_g + b coth bSX) inside its faces; the faces add
@@ -23,14 +29,16 @@ x = (λ − 550 nm)/100 nm, fitted on :data:`LAB_BANDS`. Levenberg–Marquardt w
 finite-difference Jacobians, started from the Kubelka–Munk fit.
 
 The ``mc`` model is not called at every step. A reading depends on the band only through the
-material (the backings and n are the same in every band), so one Monte Carlo reading whose
-"bands" are the nodes of a (log μa, log μs) grid around the Kubelka–Munk fit tabulates each
-thickness's readings over black and white (:meth:`Problem.build_table`, a smoothing spline
-whose misfit is the nodes' Monte Carlo variance). The fit runs on the table; the fitted
-coefficients are then read by Monte Carlo at the readings' bands and the difference moves the
-table's target (a defect correction, :data:`CORRECTIONS` times); the best verified iterate is
-kept, band by band. Measured: docs/notes/2026-12-07-fit-readings.md (a fit calling the Monte
-Carlo at every step needed about 20 readings per thickness and stalled at 1–3 ΔE00).
+material (the backings and n are the same in every band), so one reading whose "bands" are
+the nodes of a (log μa, log μs) grid around the Kubelka–Munk fit tabulates each thickness's
+readings over black and white (:meth:`Problem.build_table`, a smoothing spline whose misfit
+is the nodes' noise). The fit runs on the table; the fitted coefficients are then read by the
+model at the readings' bands and the difference moves the table's target (a defect
+correction, at most :data:`CORRECTIONS` times, until the table and the model agree within
+:data:`DEFECT_TOLERANCE` of every residual's spread); the best verified iterate is kept, band
+by band. Measured: docs/notes/2026-12-07-fit-readings.md (a fit calling the Monte Carlo at
+every step needed about 20 readings per thickness and stalled at 1–3 ΔE00; with the layered
+solver one verification is usually enough).
 
 The uncertainty of each parameter comes from the Jacobian with the readings' sd (or
 :data:`DEFAULT_SD`) and the Monte Carlo standard error; a parameter whose standard deviation
@@ -48,6 +56,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dentalux.color import delta_e00, delta_e00_scale
+from dentalux.inverse import readings_smooth
 from dentalux.inverse.models.boundary import specular  # noqa: F401 (tests, callers)
 from dentalux.inverse.readings_model import Problem, km_reflectance  # noqa: F401
 from dentalux.reading import engine
@@ -157,10 +166,11 @@ def _lab_spectrum(theta, bands):
 
 
 class _Spectral:
-    """Per-band parameters: theta (bands, 2) = log μa, log μs; residuals (bands, readings)."""
+    """Per-band parameters: theta (bands, 2) = log μa, log μs; residuals (bands, readings);
+    ``pen``: the smoothness penalty's rows (:mod:`readings_smooth`), or None."""
 
-    def __init__(self, prob: Problem):
-        self.p = prob
+    def __init__(self, prob: Problem, pen=None):
+        self.p, self.pen = prob, pen
         rows = prob.r.rows
         self.meas = np.array([r.spectrum for r in rows])
         sd = np.array([r.sd_spectrum if r.sd_spectrum is not None
@@ -222,6 +232,8 @@ def _jacobian(obj, theta, r0, step, lo, hi):
 
 def _lm(obj, theta, step, iterations, lo, hi, final_jacobian=True):
     """Block Levenberg–Marquardt; returns theta, residuals, prediction, error, Jacobian."""
+    if getattr(obj, "pen", None) is not None:  # the bands coupled by smoothness
+        return readings_smooth.lm(obj, theta, step, iterations, lo, hi, obj.pen, _jacobian)
     r, pred, err = obj.residuals(theta)
     cost = np.sum(r * r, axis=1)
     lam = np.full(theta.shape[0], 1e-2)
@@ -289,14 +301,20 @@ def _fit_table(prob: Problem, wrap, theta, lo, hi, form, iterations):
         # keep the best verified iterate, per block (band) where blocks are independent:
         # the corrections may oscillate within the Monte Carlo noise
         cost = np.sum(r * r, axis=1)
+        total = np.sum(cost) + (np.sum((obj.pen @ theta.ravel()) ** 2)
+                                if getattr(obj, "pen", None) is not None else 0.0)
         if best is None:
-            best = [theta.copy(), r.copy(), pred.copy(), err.copy(), jac.copy(), cost]
+            best = [theta.copy(), r.copy(), pred.copy(), err.copy(), jac.copy(), cost, total]
         else:
             win = cost < best[5]
+            if getattr(obj, "pen", None) is not None:  # coupled bands: the whole fit
+                pen_cost = np.sum((obj.pen @ theta.ravel()) ** 2)
+                win = np.full(cost.shape, np.sum(cost) + pen_cost < best[6])
             mask = win[None, :] if form == "spectral" else win[0]
             best = [np.where(win[:, None], theta, best[0]), np.where(win[:, None], r, best[1]),
                     np.where(mask, pred, best[2]), np.where(mask, err, best[3]),
-                    np.where(win[:, None, None], jac, best[4]), np.minimum(cost, best[5])]
+                    np.where(win[:, None, None], jac, best[4]), np.where(win, cost, best[5]),
+                    min(total, best[6])]
         # the table agrees with the model at the fit within a small part of every
         # residual's spread: a further correction would move the fit by less than that
         if np.max(np.abs(r - r_t)) < DEFECT_TOLERANCE:
@@ -329,15 +347,22 @@ def _edge_note(theta, lo, hi, bands, span_a) -> str:
 
 def fit(readings: Readings, instrument, g: float | None = None, n: float | None = None,
         model: str = "mc", photons: int = DEFAULT_PHOTONS, seed: int = 1,
-        iterations: int | None = None, solver: str = DEFAULT_SOLVER) -> ReadingsFit:
+        iterations: int | None = None, solver: str = DEFAULT_SOLVER,
+        smooth: float = 0.0) -> ReadingsFit:
     """Fit a material to ``readings`` read by ``instrument`` (module doc); ``solver`` is how
-    the ``mc`` model reads (:data:`SOLVERS`)."""
+    the ``mc`` model reads (:data:`SOLVERS`); ``smooth`` > 0 weighs a second-difference
+    penalty across the bands of a spectral fit (:mod:`readings_smooth`)."""
     from dentalux import instrument as instruments
 
     if model not in MODELS:
         raise ValueError(f"--model = {model!r}: allowed {', '.join(MODELS)}")
     if solver not in SOLVERS:
         raise ValueError(f"--solver = {solver!r}: allowed {', '.join(SOLVERS)}")
+    if not (math.isfinite(smooth) and smooth >= 0):
+        raise ValueError(f"--smooth = {smooth!r}: a weight >= 0")
+    if smooth and readings.form != "spectral":
+        raise ValueError("--smooth: the readings are CIELAB only, fitted through a smooth "
+                         "spectrum already; --smooth is for spectral readings")
     inst = instruments.get(instrument)
     if model == "mc":  # refuses 'layered' through an oblique beam before any work
         layered = engine.use_layered(inst, solver)
@@ -359,7 +384,8 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
     start = time.perf_counter()
     form = readings.form
     bands = readings.wavelength_nm if form == "spectral" else list(LAB_BANDS)
-    wrap = _Spectral if form == "spectral" else _Lab
+    pen = readings_smooth.penalty(bands, 2, smooth) if smooth else None
+    wrap = (lambda p: _Spectral(p, pen)) if form == "spectral" else _Lab
     # Kubelka–Munk first: the baseline, and the start of the Monte Carlo fit
     km = Problem(readings, inst, g, n, "km", photons, seed, bands)
     obj = wrap(km)
@@ -375,9 +401,10 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
                                                              iterations)
         evaluations = prob.mc_calls
         edge_note = _edge_note(theta, lo, hi, bands, spans[0]) if form == "spectral" else ""
-    # uncertainty of each parameter: (J^T J)^-1 with residuals in units of their sigma
+    # uncertainty of each parameter: (J^T J)^-1 with residuals in units of their sigma (with
+    # smoothing, the penalised problem's); singular: the readings alone do not pin a band
     jtj = np.einsum("bmi,bmj->bij", jac, jac)
-    cov = np.linalg.pinv(jtj)
+    cov = (np.linalg.pinv(jtj) if pen is None else readings_smooth.block_covariance(jac, pen))
     sd = np.sqrt(np.clip(np.diagonal(cov, axis1=1, axis2=2), 0, None))
     singular = np.linalg.cond(jtj) > 1e12
     sd = np.where(singular[:, None], np.inf, sd)
