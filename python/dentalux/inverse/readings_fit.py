@@ -58,7 +58,11 @@ import numpy as np
 from dentalux.color import delta_e00, delta_e00_scale
 from dentalux.inverse import readings_smooth
 from dentalux.inverse.models.boundary import specular  # noqa: F401 (tests, callers)
-from dentalux.inverse.readings_model import Problem, km_reflectance  # noqa: F401
+from dentalux.inverse.readings_model import (
+    TABLE_PHOTON_FRACTION,
+    Problem,
+    km_reflectance,  # noqa: F401 (tests, callers)
+)
 from dentalux.reading import engine
 from dentalux.reading.layered.stack import ACCURACY
 from dentalux.readings import BackingFile, Readings
@@ -96,9 +100,13 @@ TABLE_SPAN = {"mua": (math.log(100.0), math.log(3.0)), "mus": (math.log(3.0), ma
 #: defect corrections: the table fit is read by Monte Carlo at the fitted coefficients and
 #: the difference moves the target of the next table fit
 CORRECTIONS = 3
-#: the corrections stop once the table and the model agree at the fit within this part of
-#: every residual's spread (with the Monte Carlo walks they rarely do: the table is smoothed)
+#: with the layered solver the corrections stop once the table and the model agree at the
+#: fit within this part of every residual's spread (or within their noise)
 DEFECT_TOLERANCE = 0.1
+#: the noise of a table-against-model difference, in standard errors of the verifying
+#: reading's noise: 3 of the difference, whose table half has 1 / TABLE_PHOTON_FRACTION the
+#: variance
+NOISE_SPAN = 3.0 * math.sqrt(1.0 + 1.0 / TABLE_PHOTON_FRACTION)
 #: a residual above this (ΔE00) gets a warning: the model cannot reproduce the reading
 WARN_RESIDUAL = 2.0
 
@@ -185,6 +193,11 @@ class _Spectral:
         sigma = np.sqrt(self.sd ** 2 + err ** 2)
         return ((pred - self.meas) / sigma).T, pred, err
 
+    def noise(self, pred, err):
+        """The model's noise (not its accuracy) in units of each residual's spread."""
+        se = np.sqrt(np.maximum(err ** 2 - (self.p.accuracy * pred) ** 2, 0.0))
+        return (se / np.sqrt(self.sd ** 2 + err ** 2)).T
+
 
 class _Lab:
     """Five smooth-spectrum parameters in one block; residuals in L*, a*, b* per reading."""
@@ -207,6 +220,14 @@ class _Lab:
         lab_err = np.array([_model_lab_err(self.p, p, e) for p, e in zip(pred, err, strict=True)])
         sigma = np.sqrt(self.sd ** 2 + lab_err ** 2)
         return ((lab - self.meas) / sigma).reshape(1, -1), pred, err
+
+    def noise(self, pred, err):
+        """The model's noise (not its accuracy) in units of each residual's spread."""
+        acc = self.p.accuracy * pred
+        se = np.sqrt(np.maximum(err ** 2 - acc ** 2, 0.0))
+        lab_se = np.array([_lab_spread(self.p, p, e) for p, e in zip(pred, se, strict=True)])
+        lab_err = np.array([_model_lab_err(self.p, p, e) for p, e in zip(pred, err, strict=True)])
+        return (lab_se / np.sqrt(self.sd ** 2 + lab_err ** 2)).reshape(1, -1)
 
 
 # --- Levenberg–Marquardt over independent blocks -------------------------------------------
@@ -315,9 +336,12 @@ def _fit_table(prob: Problem, wrap, theta, lo, hi, form, iterations):
                     np.where(mask, pred, best[2]), np.where(mask, err, best[3]),
                     np.where(win[:, None, None], jac, best[4]), np.where(win, cost, best[5]),
                     min(total, best[6])]
-        # the table agrees with the model at the fit within a small part of every
-        # residual's spread: a further correction would move the fit by less than that
-        if np.max(np.abs(r - r_t)) < DEFECT_TOLERANCE:
+        # with the layered solver: the table agrees with the model at the fit within a small
+        # part of every residual's spread, or within what the rim corrections' noise in
+        # both resolves, so a further correction would move the fit by less than that (the
+        # walks' tables are smoothed through their noise: they always correct)
+        noise = obj.noise(pred, err) * NOISE_SPAN
+        if prob.layered and np.all(np.abs(r - r_t) < DEFECT_TOLERANCE + noise):
             break
         # defect correction: the table's error at the fit moves the next fit's target
         prob.defect = prob.defect + (pred - pred_t)
