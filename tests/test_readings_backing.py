@@ -81,11 +81,13 @@ def test_bad_backing_file_exit_2_and_write_nothing(tmp_path, capsys, card, needl
     assert not out.exists() and stdout == ""
 
 
-def test_mc_fit_over_a_spectral_backing(tmp_path):
-    """The mc model reads a spectral backing (the table at the card's lowest and highest
-    reflectance, the verification at the card itself): layered readings over black and the
-    card at 0.6 mm are fitted back, and the fit reads the card's reading at 1.2 mm within 4
-    standard errors plus the solver's stated accuracy."""
+@pytest.mark.parametrize("where", ["readings file", "instrument"])
+def test_mc_fit_over_a_spectral_backing(tmp_path, where):
+    """The mc model reads a spectral backing, named in the readings file or the instrument's
+    own (the table at the card's lowest and highest reflectance, the verification at the card
+    itself): layered readings over black and the card at 0.6 mm are fitted back, and the fit
+    reads the card's reading at 1.2 mm within 4 standard errors plus the solver's stated
+    accuracy."""
     (tmp_path / "card.csv").write_text(CARD)
     from dentalux.materials import Material
 
@@ -94,14 +96,18 @@ def test_mc_fit_over_a_spectral_backing(tmp_path):
                     mus=np.array([12.0, 10.0, 9.0]), g=np.full(3, 0.8), fd=np.zeros(3),
                     n=np.full(3, 1.5), provenance={"kind": "derived", "source": "test"})
     card = readings.backing_file("card.csv", tmp_path, "test")
+    inst = instrument.get(INST)
+    name = "card.csv"
+    if where == "instrument":
+        inst, name = inst.override(backing_white=card.spectrum), "white"
     rows = ["thickness_mm,backing," + ",".join(f"r{w}" for w in WL)]
-    m = dental.read([(comp, 0.6)], instrument=INST, bands=bands, photons=4000, seed=3,
+    m = dental.read([(comp, 0.6)], instrument=inst, bands=bands, photons=4000, seed=3,
                     solver="layered", backing_white=card.spectrum)
-    for b, key in (("black", "over_black"), ("card.csv", "over_white")):
+    for b, key in (("black", "over_black"), (name, "over_white")):
         rows.append(f"0.6,{b}," + ",".join(f"{x:.6f}" for x in m.spectra[key]))
     f = tmp_path / "r.csv"
     f.write_text("\n".join(rows) + "\n")
-    res = rf.fit(readings.load(f), INST, g=0.8, n=1.5, photons=4000, solver="auto")
+    res = rf.fit(readings.load(f), inst, g=0.8, n=1.5, photons=4000, solver="auto")
     assert res.solver == "layered" and res.identifiable
     fitted = Material(name="fit", wavelength_nm=res.wavelength_nm, mua=res.mua, mus=res.mus,
                       g=np.full(3, 0.8), fd=np.zeros(3), n=np.full(3, 1.5),
@@ -115,6 +121,6 @@ def test_mc_fit_over_a_spectral_backing(tmp_path):
     spec = np.asarray(b.spectra["over_white"])
     prob = rf.Problem(readings.load(f), instrument.get(INST), 0.8, 1.5, "km", 0, 1, bands)
     acc = float(delta_e00(prob.lab(spec), prob.lab(spec * (1 + ACCURACY))))
-    print(f"spectral backing, 1.2 mm over the card: {de:.3f} ΔE00 (s.e. {se:.3f}, "
+    print(f"spectral backing ({where}), 1.2 mm over the card: {de:.3f} ΔE00 (s.e. {se:.3f}, "
           f"accuracy {acc:.3f})")
     assert de < 4 * se + acc, (de, se, acc)

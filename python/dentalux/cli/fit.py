@@ -123,7 +123,8 @@ def fit_command(
                               "with the Saunderson correction)"),
     readings_path: Path = typer.Option(
         None, "--readings", help="CSV of instrument readings: thickness_mm, backing "
-        "(black|white|reflectance), L,a,b or r400...r700 [, sd_*] (docs/fitting.md)"),
+        "(black|white|reflectance|FILE.csv spectrum), L,a,b or r400...r700 [, sd_*] "
+        "(docs/fitting.md)"),
     instrument_name: str = typer.Option(
         None, "--instrument", help="with --readings: the instrument that read them (preset "
         "name or TOML file)"),
