@@ -216,6 +216,10 @@ def test_monte_carlo_solver_and_its_refusals(tmp_path, capsys):
     res = rf.fit(data, INST, g=0.8, n=1.5, photons=2000, solver="monte-carlo")
     assert res.solver == "monte-carlo" and res.mc_stderr_de00 > 0
     assert all(math.isfinite(r["delta_e00"]) for r in res.residuals)
+    # smoothing couples the bands of the table fit too: the whole fit is kept or not
+    smooth = rf.fit(data, INST, g=0.8, n=1.5, photons=2000, solver="monte-carlo", smooth=1e4)
+    assert smooth.smooth == 1e4 and all(math.isfinite(r["delta_e00"]) for r in smooth.residuals)
+    assert np.all(smooth.mua_ci[:, 0] <= smooth.mua) and np.all(smooth.mua <= smooth.mua_ci[:, 1])
     out = tmp_path / "m.toml"
     code, stdout, err = run(capsys, "fit", "--readings", f, "--instrument", "d8-benchtop-sav",
                             "--solver", "layered", "--out", out, "--json")
