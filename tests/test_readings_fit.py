@@ -207,8 +207,9 @@ def test_round_trip_cielab_only(tmp_path, capsys):
 
 
 def test_monte_carlo_solver_and_its_refusals(tmp_path, capsys):
-    """--solver monte-carlo keeps the Monte Carlo fit (its noise reported); --solver layered
-    through a d/8 instrument, and --solver without --readings, are refused."""
+    """--solver monte-carlo keeps the Monte Carlo fit (its noise reported); auto picks the
+    solver by the beam; --solver layered through a d/8 instrument, and --solver without
+    --readings, are refused."""
     f = tmp_path / "r.csv"
     f.write_text(_km_rows([0.3, 0.1, 0.05], [12.0, 10.0, 9.0],
                           [(0.5, "black"), (0.5, "white")]))
@@ -220,6 +221,10 @@ def test_monte_carlo_solver_and_its_refusals(tmp_path, capsys):
     smooth = rf.fit(data, INST, g=0.8, n=1.5, photons=2000, solver="monte-carlo", smooth=1e4)
     assert smooth.smooth == 1e4 and all(math.isfinite(r["delta_e00"]) for r in smooth.residuals)
     assert np.all(smooth.mua_ci[:, 0] <= smooth.mua) and np.all(smooth.mua <= smooth.mua_ci[:, 1])
+    # auto: the layered solver for a normal beam (the laterally infinite disc too), the walks
+    # for d/8
+    assert rf.fit(data, "infinite", g=0.8, n=1.5, photons=2000).solver == "layered"
+    assert rf.fit(data, "d8-benchtop-sav", g=0.8, n=1.5, photons=2000).solver == "monte-carlo"
     out = tmp_path / "m.toml"
     code, stdout, err = run(capsys, "fit", "--readings", f, "--instrument", "d8-benchtop-sav",
                             "--solver", "layered", "--out", out, "--json")
