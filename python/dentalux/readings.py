@@ -3,8 +3,9 @@
 One row per reading (docs/fitting.md):
 
 - ``thickness_mm``: the disc's thickness [mm], > 0;
-- ``backing``: ``black`` or ``white`` (the instrument's backings) or a number, the backing's
-  reflectance in [0, 1];
+- ``backing``: ``black`` or ``white`` (the instrument's backings), a number, the backing's
+  reflectance in [0, 1], or ``FILE.csv``, the backing's spectrum (columns ``wavelength_nm``,
+  ``reflectance``; a relative path is taken from the readings file's folder);
 - then either ``L,a,b`` (CIELAB, D65 and the 2° observer unless ``illuminant`` and
   ``observer`` columns say otherwise) or spectral reflectance columns ``r400 ... r700``:
   any subset of 360-780 nm on the 10 nm grid, reflectance as a fraction in [0, 1];
@@ -37,8 +38,25 @@ GRID_NM = (360.0, 780.0, 10.0)
 BACKINGS = ("black", "white")
 LAB_RANGES = {"L": (0.0, 100.0), "a": (-128.0, 127.0), "b": (-128.0, 127.0)}
 OPTIONAL = ("illuminant", "observer")
+#: what a backing spectrum must span for CIELAB-only readings [nm]
+LAB_COVERAGE_NM = (400.0, 700.0)
 _SPECTRAL = re.compile(r"^r(\d+(?:\.\d+)?)$")
 _WHERE = "readings file"
+
+
+@dataclass(frozen=True)
+class BackingFile:
+    """A backing given as a spectrum file: its name as the readings file writes it, and its
+    wavelengths [nm] and reflectances."""
+
+    name: str
+    wavelength_nm: tuple[float, ...]
+    reflectance: tuple[float, ...]
+
+    @property
+    def spectrum(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """As :func:`dentalux.dental.read` takes a backing spectrum."""
+        return self.wavelength_nm, self.reflectance
 
 
 @dataclass
@@ -48,7 +66,7 @@ class Reading:
 
     line: int
     thickness_mm: float
-    backing: str | float
+    backing: str | float | BackingFile
     lab: tuple[float, float, float] | None = None
     spectrum: np.ndarray | None = None
     sd_lab: tuple[float, float, float] | None = None
@@ -56,6 +74,8 @@ class Reading:
 
     @property
     def backing_label(self) -> str:
+        if isinstance(self.backing, BackingFile):
+            return self.backing.name
         return self.backing if isinstance(self.backing, str) else f"{self.backing:g}"
 
 
@@ -87,17 +107,58 @@ def _grid_column(col: str, where: str) -> float:
     return lam
 
 
-def _backing(row: dict, where: str) -> str | float:
+def _backing(row: dict, where: str, folder: Path, files: dict) -> str | float | BackingFile:
     raw = str(row.get("backing", "")).strip()
     key = f"{where}: line {row['_line']}: backing"
     if raw.lower() in BACKINGS:
         return raw.lower()
+    if raw.lower().endswith(".csv"):
+        if raw not in files:  # each file read once, however many rows name it
+            files[raw] = backing_file(raw, folder, key)
+        return files[raw]
     try:
         x = float(raw)
     except ValueError:
-        raise ValueError(f"{key} = {raw!r}: allowed black, white or a reflectance in "
-                         "[0, 1]") from None
+        raise ValueError(f"{key} = {raw!r}: allowed black, white, a reflectance in [0, 1] or "
+                         "FILE.csv (a backing spectrum: wavelength_nm, reflectance)") from None
     return inputs.number(x, key, 0.0, 1.0)
+
+
+def backing_file(name: str, folder: Path, key: str) -> BackingFile:
+    """A backing spectrum file (``wavelength_nm``, ``reflectance``), ``name`` relative to
+    ``folder``; ``key`` says where it was named, for errors."""
+    path = Path(name) if Path(name).is_absolute() else folder / name
+    if not path.is_file():
+        raise ValueError(f"{key} = {name!r}: no such file ({path})")
+    what = f"backing spectrum (named at {key})"
+    header, rows = inputs.read_csv(path, what, comments=True)
+    where = f"{what} {path}"
+    missing = [c for c in ("wavelength_nm", "reflectance") if c not in header]
+    if missing:
+        raise ValueError(f"{where}: missing column(s) {', '.join(missing)}: a backing spectrum "
+                         "has columns wavelength_nm, reflectance (a fraction in [0, 1])")
+    if len(rows) < 2:
+        raise ValueError(f"{where}: needs at least two rows (wavelength_nm, reflectance)")
+    wl, refl = [], []
+    for row in rows:
+        w = inputs.cell(row, "wavelength_nm", where, 0.0, None, lo_open=True, unit="nm")
+        if wl and w <= wl[-1]:
+            raise ValueError(f"{where}: line {row['_line']}: wavelength_nm = {w:g} does not "
+                             f"increase (the row before has {wl[-1]:g})")
+        wl.append(w)
+        refl.append(inputs.cell(row, "reflectance", where, 0.0, 1.0))
+    return BackingFile(name=name, wavelength_nm=tuple(wl), reflectance=tuple(refl))
+
+
+def _check_coverage(rows: list[Reading], bands: list[float], where: str) -> None:
+    """A backing spectrum must span the bands read (it is not extrapolated)."""
+    for r in rows:
+        b = r.backing
+        if isinstance(b, BackingFile) and (b.wavelength_nm[0] > bands[0]
+                                           or b.wavelength_nm[-1] < bands[-1]):
+            raise ValueError(f"{where}: line {r.line}: backing = {b.name!r} covers "
+                             f"{b.wavelength_nm[0]:g}-{b.wavelength_nm[-1]:g} nm: it must span "
+                             f"the readings' {bands[0]:g}-{bands[-1]:g} nm")
 
 
 def _uniform(rows, col: str, where: str, default: str) -> str:
@@ -140,9 +201,11 @@ def load(path, illuminant: str | None = None, observer: str | None = None) -> Re
         raise ValueError(f"{where}: unknown column {unknown[0]!r}: allowed thickness_mm, "
                          "backing, L, a, b, r360 ... r780, sd_<column>, illuminant, observer")
     out = []
+    files: dict = {}
     for row in rows:
         t = inputs.cell(row, "thickness_mm", where, 0.0, None, lo_open=True, unit="mm")
-        r = Reading(line=row["_line"], thickness_mm=t, backing=_backing(row, where))
+        r = Reading(line=row["_line"], thickness_mm=t,
+                    backing=_backing(row, where, p.resolve().parent, files))
         if has_lab:
             r.lab = tuple(inputs.cell(row, c, where, *LAB_RANGES[c]) for c in "Lab")
             if all(f"sd_{c}" in header for c in "Lab"):
@@ -154,6 +217,9 @@ def load(path, illuminant: str | None = None, observer: str | None = None) -> Re
                                           for c in spectral])
         out.append(r)
     _check_order(out, spectral, where)
+    # a CIELAB-only fit reads LAB_COVERAGE_NM (readings_fit.LAB_BANDS beyond it are held
+    # at the spectrum's ends, where the colour-matching functions are nearly zero)
+    _check_coverage(out, wl or list(LAB_COVERAGE_NM), where)
     ill = illuminant or _uniform(rows, "illuminant", where, "D65")
     obs = observer or _uniform(rows, "observer", where, "2")
     return Readings(path=str(p), rows=out, form="spectral" if spectral else "lab",

@@ -50,7 +50,7 @@ def write_checked_spectrum(results, out: Path, name: str, **kw) -> None:
 
 
 def _fit_readings(readings_path: Path, instrument_name, g, n, model, photons, seed, out, name,
-                  as_json: bool) -> None:
+                  as_json: bool, solver: str | None, smooth: float | None) -> None:
     """``fit --readings``: a material from instrument readings (dentalux.inverse.readings_fit)."""
     from dentalux import instrument, materials, readings
     from dentalux.inverse import readings_fit
@@ -58,6 +58,9 @@ def _fit_readings(readings_path: Path, instrument_name, g, n, model, photons, se
     if model not in readings_fit.MODELS:
         raise ValueError(f"--model = {model!r}: with --readings allowed "
                          f"{', '.join(readings_fit.MODELS)}")
+    solver = readings_fit.DEFAULT_SOLVER if solver is None else solver
+    if solver not in readings_fit.SOLVERS:
+        raise ValueError(f"--solver = {solver!r}: allowed {', '.join(readings_fit.SOLVERS)}")
     if instrument_name is None:
         raise ValueError("--readings needs --instrument NAME|FILE.toml (the instrument that "
                          "read them; `dentalux instruments list`)")
@@ -70,7 +73,8 @@ def _fit_readings(readings_path: Path, instrument_name, g, n, model, photons, se
     data = readings.load(readings_path)
     name = name or out.stem
     res = readings_fit.fit(data, inst, g=g, n=n, model=model,
-                           photons=photons or readings_fit.DEFAULT_PHOTONS, seed=seed)
+                           photons=photons or readings_fit.DEFAULT_PHOTONS, seed=seed,
+                           solver=solver, smooth=0.0 if smooth is None else smooth)
     doc = readings_fit.material_doc(res, data, inst, name)
     import tomli_w
 
@@ -91,10 +95,11 @@ def _fit_readings(readings_path: Path, instrument_name, g, n, model, photons, se
                           for r in res.residuals],
             "identifiable": res.identifiable, "model": res.model}, "fit"))
         return
-    table = Table(title=f"{name}: {res.model} fit to {readings_path} read with {inst.name} "
+    how = f"{res.model} ({res.solver})" if res.solver else res.model
+    table = Table(title=f"{name}: {how} fit to {readings_path} read with {inst.name} "
                         f"(g {res.g:g}, n {res.n:g}; {res.seconds:.1f} s)")
     for col in ("line", "thickness [mm]", "backing", "measured L*a*b*", "predicted L*a*b*",
-                "ΔE00", "MC s.e. ΔE00"):
+                "ΔE00", "model s.e. ΔE00"):
         table.add_column(col, justify="right")
     for r in res.residuals:
         table.add_row(str(r["line"]), f"{r['thickness_mm']:g}", str(r["backing"]),
@@ -118,7 +123,8 @@ def fit_command(
                               "with the Saunderson correction)"),
     readings_path: Path = typer.Option(
         None, "--readings", help="CSV of instrument readings: thickness_mm, backing "
-        "(black|white|reflectance), L,a,b or r400...r700 [, sd_*] (docs/fitting.md)"),
+        "(black|white|reflectance|FILE.csv spectrum), L,a,b or r400...r700 [, sd_*] "
+        "(docs/fitting.md)"),
     instrument_name: str = typer.Option(
         None, "--instrument", help="with --readings: the instrument that read them (preset "
         "name or TOML file)"),
@@ -132,7 +138,7 @@ def fit_command(
     photons: int = typer.Option(
         None, help=f"photons per Monte Carlo evaluation (mc; 1000 ... "
                    f"{limits.MAX_FIT_PHOTONS:.0e}; default 400 000, with --readings 20 000 "
-                   "per band)"),
+                   "per band, for the layered solver's rim correction where it reads)"),
     seed: int = typer.Option(1, help="random seed of the Monte Carlo evaluations (mc)"),
     table: Path = typer.Option(None, help="CSV: wavelength_nm,tt,tr,n,g,thickness_mm[,fd,...]"),
     out: str = typer.Option(
@@ -141,6 +147,13 @@ def fit_command(
     name: str = typer.Option(None, help="material name in the TOML (default: file stem)"),
     description: str = typer.Option("", help="material description in the TOML"),
     as_json: bool = typer.Option(False, "--json", help="print JSON"),
+    solver: str = typer.Option(
+        None, help="with --readings --model mc: how the instrument's readings are computed: "
+        "auto (default: the layered solver where the beam is normal, else Monte Carlo) | "
+        "layered | monte-carlo"),
+    smooth: float = typer.Option(
+        None, help="with --readings (spectral): weight >= 0 of a second-difference penalty "
+        "on log μa and log μs across the bands (default 0: each band on its own)"),
 ) -> None:
     """Find μa and μs [1/mm] from total transmittance and reflectance of a disc, or
     (--readings) a material from an instrument's readings over black and white."""
@@ -151,10 +164,13 @@ def fit_command(
             raise ValueError(f"--readings reads thickness and backing per row; drop --"
                              f"{', --'.join(given)}")
         _fit_readings(readings_path, instrument_name, g, n, model, photons, seed, out, name,
-                      as_json)
+                      as_json, solver, smooth)
         return
     if instrument_name is not None:
         raise ValueError("--instrument goes with --readings")
+    for flag, value in (("--solver", solver), ("--smooth", smooth)):
+        if value is not None:
+            raise ValueError(f"{flag} goes with --readings")
     photons = 400_000 if photons is None else photons
     if model == "mc":
         limits.check_count(photons, "--photons", limits.MAX_FIT_PHOTONS, lo=1000)

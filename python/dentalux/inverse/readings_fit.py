@@ -1,11 +1,17 @@
 """Fit μa(λ), μs(λ) of a material to a lab's instrument readings (``dentalux fit --readings``).
 
-Two forward models of the same readings (:mod:`dentalux.readings`):
+Two forward models of the same readings (:mod:`dentalux.readings`,
+:mod:`dentalux.inverse.readings_model`):
 
 - ``mc``: the reading engine (:func:`dentalux.dental.read`) through the instrument model,
-  edge loss included. Every evaluation uses the same seed (common random numbers), so the
-  Monte Carlo noise is a fixed, smooth error of the model rather than a jitter that stalls
-  the optimiser; it is reported beside the residuals (``mc_stderr_de00``).
+  edge loss included, with one of its solvers (``solver``, :data:`SOLVERS`): 'auto' (the
+  default) reads with the layered solver wherever the instrument's beam is normal and with
+  the Monte Carlo walks elsewhere (d/8). The layered solver's only noise is its Monte Carlo
+  correction for the disc's rim; the walks' is all of it. Every evaluation uses the same seed
+  (common random numbers), so that noise is a fixed, smooth error of the model rather than a
+  jitter that stalls the optimiser. The model's error (the standard error and, with the
+  layered solver, its stated accuracy ``stack.ACCURACY``) weighs the residuals and is
+  reported beside them (``mc_stderr_de00``).
 - ``km``: Kubelka–Munk with the Saunderson correction, the field's baseline. A disc of
   thickness X on a backing of reflectance R_g has, with a = 1 + K/S, b = sqrt(a² − 1),
   R = (1 − R_g (a − b coth bSX)) / (a − R_g + b coth bSX) inside its faces; the faces add
@@ -23,14 +29,16 @@ x = (λ − 550 nm)/100 nm, fitted on :data:`LAB_BANDS`. Levenberg–Marquardt w
 finite-difference Jacobians, started from the Kubelka–Munk fit.
 
 The ``mc`` model is not called at every step. A reading depends on the band only through the
-material (the backings and n are the same in every band), so one Monte Carlo reading whose
-"bands" are the nodes of a (log μa, log μs) grid around the Kubelka–Munk fit tabulates each
-thickness's readings over black and white (:meth:`_Problem.build_table`, a smoothing spline
-whose misfit is the nodes' Monte Carlo variance). The fit runs on the table; the fitted
-coefficients are then read by Monte Carlo at the readings' bands and the difference moves the
-table's target (a defect correction, :data:`CORRECTIONS` times); the best verified iterate is
-kept, band by band. Measured: docs/notes/2026-12-07-fit-readings.md (a fit calling the Monte
-Carlo at every step needed about 20 readings per thickness and stalled at 1–3 ΔE00).
+material (the backings and n are the same in every band), so one reading whose "bands" are
+the nodes of a (log μa, log μs) grid around the Kubelka–Munk fit tabulates each thickness's
+readings over black and white (:meth:`Problem.build_table`, a smoothing spline whose misfit
+is the nodes' noise). The fit runs on the table; the fitted coefficients are then read by the
+model at the readings' bands and the difference moves the table's target (a defect
+correction, at most :data:`CORRECTIONS` times, until the table and the model agree within
+:data:`DEFECT_TOLERANCE` of every residual's spread); the best verified iterate is kept, band
+by band. Measured: docs/notes/2026-12-07-fit-readings.md (a fit calling the Monte Carlo at
+every step needed about 20 readings per thickness and stalled at 1–3 ΔE00; with the layered
+solver one verification is usually enough).
 
 The uncertainty of each parameter comes from the Jacobian with the readings' sd (or
 :data:`DEFAULT_SD`) and the Monte Carlo standard error; a parameter whose standard deviation
@@ -47,12 +55,23 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dentalux.color import delta_e00, delta_e00_scale, system
-from dentalux.inverse.models.boundary import moments, specular
-from dentalux.readings import Readings
-from dentalux.spectra import Reconstruction
+from dentalux.color import delta_e00, delta_e00_scale
+from dentalux.inverse import readings_smooth
+from dentalux.inverse.models.boundary import specular  # noqa: F401 (tests, callers)
+from dentalux.inverse.readings_model import (
+    TABLE_PHOTON_FRACTION,
+    Problem,
+    km_reflectance,  # noqa: F401 (tests, callers)
+)
+from dentalux.reading import engine
+from dentalux.reading.layered.stack import ACCURACY
+from dentalux.readings import BackingFile, Readings
 
 MODELS = ("mc", "km")
+#: how the ``mc`` model reads: the solvers of :func:`dentalux.dental.read`; 'auto' is the
+#: layered solver wherever the instrument's beam is normal, else the Monte Carlo walks
+SOLVERS = engine.SOLVERS
+DEFAULT_SOLVER = "auto"
 #: g and n when the user gives none: typical of resin composites and glass ceramics
 #: (n 1.50-1.55; g of filled resins 0.6-0.8 in the inverse-adding-doubling literature)
 ASSUMED_G, ASSUMED_N = 0.6, 1.5
@@ -77,13 +96,21 @@ DEFAULT_ITERATIONS = {"table": 40, "km": 60}
 #: the Kubelka-Munk fit (in log: μa down 100x, up 3x, as edge loss makes Kubelka-Munk
 #: over-estimate absorption; μs 5x either way)
 TABLE_NODES = (12, 10)
+#: the layered solver's table is smooth (no noise for the spline to average), so fewer nodes
+#: do: 8 x 7 left the fits' residuals within 0.03 ΔE00 of 12 x 10 at 0.6-0.7 of the CPU
+#: (docs/notes/2026-12-07-fit-readings.md)
+LAYERED_TABLE_NODES = (8, 7)
 TABLE_SPAN = {"mua": (math.log(100.0), math.log(3.0)), "mus": (math.log(3.0), math.log(3.0))}
-#: the table's photons per node, as a fraction of the fit's photons: the defect correction
-#: reads the fit itself with all of them, so the table needs to be right in slope only
-TABLE_PHOTON_FRACTION = 0.5
 #: defect corrections: the table fit is read by Monte Carlo at the fitted coefficients and
 #: the difference moves the target of the next table fit
 CORRECTIONS = 3
+#: with the layered solver the corrections stop once the table and the model agree at the
+#: fit within this part of every residual's spread (or within their noise)
+DEFECT_TOLERANCE = 0.1
+#: the noise of a table-against-model difference, in standard errors of the verifying
+#: reading's noise: 3 of the difference, whose table half has 1 / TABLE_PHOTON_FRACTION the
+#: variance
+NOISE_SPAN = 3.0 * math.sqrt(1.0 + 1.0 / TABLE_PHOTON_FRACTION)
 #: a residual above this (ΔE00) gets a warning: the model cannot reproduce the reading
 WARN_RESIDUAL = 2.0
 
@@ -112,155 +139,13 @@ class ReadingsFit:
     warnings: list[str] = field(default_factory=list)
     mc_stderr_de00: float = 0.0
     cpu_seconds: float = 0.0
+    #: how the mc model read: 'layered' or 'monte-carlo' ('' for km)
+    solver: str = ""
+    #: the weight of the smoothness penalty across bands (0: none)
+    smooth: float = 0.0
 
 
-# --- forward models -----------------------------------------------------------------------
-
-
-def km_reflectance(mua, mus, g: float, n: float, thickness, rg, k1: float):
-    """Kubelka–Munk + Saunderson reflectance of a disc on a backing (module doc); arrays
-    broadcast."""
-    k = 2.0 * np.asarray(mua, dtype=float)
-    s = np.maximum(0.75 * np.asarray(mus, dtype=float) * (1.0 - g), 1e-12)
-    a = 1.0 + k / s
-    b = np.sqrt(np.maximum(a * a - 1.0, 0.0))
-    bsx = np.maximum(b * s * thickness, 1e-12)
-    # b coth(bSX), with its limit 1/(SX) as b -> 0 (no absorption)
-    bcoth = np.where(b * s * thickness < 1e-8, 1.0 / (s * thickness),
-                     b / np.tanh(np.minimum(bsx, 300.0)))
-    r = (1.0 - rg * (a - bcoth)) / (a - rg + bcoth)
-    k2 = moments(n, 1.0)[0]
-    return k1 + (1.0 - k1) * (1.0 - k2) * r / (1.0 - k2 * r)
-
-
-class _Problem:
-    """The readings, the instrument and one forward model: spectra of every reading."""
-
-    def __init__(self, readings: Readings, inst, g, n, model, photons, seed, bands):
-        self.r, self.inst, self.g, self.n = readings, inst, g, n
-        self.model, self.photons, self.seed = model, photons, seed
-        self.bands = np.asarray(bands, dtype=float)
-        self.cs = system(readings.illuminant, str(readings.observer))
-        self.rec = Reconstruction(self.bands, grid=self.cs.wavelengths, basis="hold")
-        self.k1 = 0.0 if inst.spec.specular == "excluded" else specular(n, 1.0)
-        self.evaluations = 0
-        self.mc_calls = 0
-        self.cpu_seconds = 0.0
-        self.defect = 0.0
-        # each reading -> (thickness, the pair of backings read together, slot 0|1)
-        self.calls: dict = {}
-        self.slot = []
-        for t in sorted({row.thickness_mm for row in readings.rows}):
-            backs = []
-            for row in readings.rows:
-                if row.thickness_mm == t and row.backing not in backs:
-                    backs.append(row.backing)
-            for i in range(0, len(backs), 2):
-                self.calls[(t, i // 2)] = backs[i:i + 2]
-        for row in readings.rows:
-            for key, pair in self.calls.items():
-                if key[0] == row.thickness_mm and row.backing in pair:
-                    self.slot.append((key, pair.index(row.backing)))
-                    break
-
-    def rg(self, backing) -> np.ndarray:
-        from dentalux.dental import backing_spectrum
-
-        value = getattr(self.inst, f"backing_{backing}") if isinstance(backing, str) else backing
-        return backing_spectrum(value, self.bands, "backing")
-
-    def material(self, bands, mua, mus):
-        from dentalux.materials import Material
-
-        bands = np.asarray(bands, float)
-        return Material(name="fit", wavelength_nm=bands, mua=np.asarray(mua, float),
-                        mus=np.asarray(mus, float), g=np.full(bands.size, self.g),
-                        fd=np.zeros(bands.size), n=np.full(bands.size, self.n),
-                        provenance={"kind": "fitted", "source": "dentalux fit --readings"})
-
-    def read(self, bands, mua, mus) -> dict:
-        """One Monte Carlo reading per (thickness, pair of backings) call, at ``bands``."""
-        from dentalux import dental
-
-        mat = self.material(bands, mua, mus)
-        got = {}
-        for key, pair in self.calls.items():
-            over = {}
-            for j, b in enumerate(pair):
-                slot = ("backing_black", "backing_white")[j]
-                if not isinstance(b, str):
-                    over[slot] = b
-                elif b != ("black", "white")[j]:
-                    over[slot] = getattr(self.inst, f"backing_{b}")
-            got[key] = dental.read([(mat, key[0])], bands=np.asarray(bands).tolist(),
-                                   instrument=self.inst, photons=self.photons, seed=self.seed,
-                                   progress=False, illuminant=self.r.illuminant,
-                                   observer=self.r.observer, **over)
-            self.cpu_seconds += got[key].cpu_seconds
-        return got
-
-    def spectra(self, mua, mus):
-        """(readings, bands) reflectances and their Monte Carlo standard errors (plus the
-        defect correction of the table model)."""
-        self.evaluations += 1
-        if self.model == "km":
-            out = np.array([km_reflectance(mua, mus, self.g, self.n, row.thickness_mm,
-                                           self.rg(row.backing), self.k1)
-                            for row in self.r.rows])
-            return out, np.zeros_like(out)
-        if self.model == "table":
-            pts = np.column_stack([np.log(mua), np.log(mus)])
-            pts = np.clip(pts, self.table_lo, self.table_hi)
-            vals = np.array([self.tables[(key, j)].ev(pts[:, 0], pts[:, 1])
-                             for key, j in self.slot])
-            errs = np.array([self.table_err[(key, j)].ev(pts[:, 0], pts[:, 1])
-                             for key, j in self.slot])
-            return vals + self.defect, np.abs(errs)
-        self.mc_calls += 1
-        got = self.read(self.bands, mua, mus)
-        vals, errs = [], []
-        for key, j in self.slot:
-            name = ("over_black", "over_white")[j]
-            vals.append(got[key].spectra[name])
-            errs.append(got[key].spectra[f"{name}_stderr"])
-        return np.asarray(vals), np.asarray(errs)
-
-    def build_table(self, log_mua_range, log_mus_range, nodes):
-        """The table model: every (thickness, backing pair) read once over a grid of
-        (log μa, log μs) nodes, each node a band of one Monte Carlo reading (the reading
-        of a band depends on the band only through the material; backings and n are the
-        same in every band). Cubic interpolation between nodes."""
-        from scipy.interpolate import RectBivariateSpline
-
-        la = np.linspace(*log_mua_range, nodes[0])
-        ls = np.linspace(*log_mus_range, nodes[1])
-        a, s = np.meshgrid(la, ls, indexing="ij")
-        fake = 380.0 + 0.1 * np.arange(a.size)  # node k is read as band 380 + 0.1 k nm
-        full, self.photons = self.photons, max(1000, int(self.photons * TABLE_PHOTON_FRACTION))
-        try:
-            got = self.read(fake, np.exp(a.ravel()), np.exp(s.ravel()))
-        finally:
-            self.photons = full
-        self.tables, self.table_err = {}, {}
-        for key in self.calls:
-            for j, name in enumerate(("over_black", "over_white")):
-                v = np.asarray(got[key].spectra[name]).reshape(a.shape)
-                e = np.asarray(got[key].spectra[f"{name}_stderr"]).reshape(a.shape)
-                # a smoothing spline: its squared misfit at the nodes is about the nodes'
-                # summed Monte Carlo variance, so it follows the surface, not the noise
-                self.tables[(key, j)] = RectBivariateSpline(la, ls, v, kx=3, ky=3,
-                                                            s=float(np.sum(e * e)))
-                self.table_err[(key, j)] = RectBivariateSpline(la, ls, e, kx=1, ky=1)
-        self.table_lo = np.array([la[0], ls[0]])
-        self.table_hi = np.array([la[-1], ls[-1]])
-        self.defect = 0.0
-        self.model = "table"
-
-    def lab(self, spectra):
-        return self.cs.XYZ_to_Lab(self.cs.grid_to_XYZ(self.rec(np.asarray(spectra))))
-
-
-def _lab_spread(prob: _Problem, spectrum, sd) -> np.ndarray:
+def _lab_spread(prob: Problem, spectrum, sd) -> np.ndarray:
     """The standard deviation of L*, a*, b* from independent errors ``sd`` of each band, to
     first order (one derivative per band)."""
     spectrum, sd = np.asarray(spectrum, float), np.asarray(sd, float)
@@ -269,6 +154,17 @@ def _lab_spread(prob: _Problem, spectrum, sd) -> np.ndarray:
     base = prob.lab(spectrum)
     steps = spectrum[None, :] + np.diag(sd)
     return np.sqrt(np.sum((prob.lab(steps) - base) ** 2, axis=0))
+
+
+def _model_lab_err(prob: Problem, spectrum, err) -> np.ndarray:
+    """The model's error of L*, a*, b*: its noise, independent from band to band, and the
+    layered solver's accuracy, which may move every band together (so it moves L* most)."""
+    spectrum = np.asarray(spectrum, float)
+    acc = prob.accuracy * spectrum
+    noise = _lab_spread(prob, spectrum, np.sqrt(np.maximum(np.asarray(err) ** 2 - acc ** 2, 0)))
+    if not prob.accuracy:
+        return noise
+    return np.hypot(noise, np.abs(prob.lab(spectrum + acc) - prob.lab(spectrum)))
 
 
 # --- parametrisations ---------------------------------------------------------------------
@@ -284,10 +180,11 @@ def _lab_spectrum(theta, bands):
 
 
 class _Spectral:
-    """Per-band parameters: theta (bands, 2) = log μa, log μs; residuals (bands, readings)."""
+    """Per-band parameters: theta (bands, 2) = log μa, log μs; residuals (bands, readings);
+    ``pen``: the smoothness penalty's rows (:mod:`readings_smooth`), or None."""
 
-    def __init__(self, prob: _Problem):
-        self.p = prob
+    def __init__(self, prob: Problem, pen=None):
+        self.p, self.pen = prob, pen
         rows = prob.r.rows
         self.meas = np.array([r.spectrum for r in rows])
         sd = np.array([r.sd_spectrum if r.sd_spectrum is not None
@@ -302,11 +199,16 @@ class _Spectral:
         sigma = np.sqrt(self.sd ** 2 + err ** 2)
         return ((pred - self.meas) / sigma).T, pred, err
 
+    def noise(self, pred, err):
+        """The model's noise (not its accuracy) in units of each residual's spread."""
+        se = np.sqrt(np.maximum(err ** 2 - (self.p.accuracy * pred) ** 2, 0.0))
+        return (se / np.sqrt(self.sd ** 2 + err ** 2)).T
+
 
 class _Lab:
     """Five smooth-spectrum parameters in one block; residuals in L*, a*, b* per reading."""
 
-    def __init__(self, prob: _Problem):
+    def __init__(self, prob: Problem):
         self.p = prob
         rows = prob.r.rows
         self.meas = np.array([r.lab for r in rows])
@@ -320,10 +222,18 @@ class _Lab:
     def residuals(self, theta):
         pred, err = self.p.spectra(*self.coefficients(theta))
         lab = self.p.lab(pred)
-        # the Monte Carlo error of each L*, a*, b*, to first order through the reconstruction
-        lab_err = np.array([_lab_spread(self.p, p, e) for p, e in zip(pred, err, strict=True)])
+        # the model's error of each L*, a*, b*, to first order through the reconstruction
+        lab_err = np.array([_model_lab_err(self.p, p, e) for p, e in zip(pred, err, strict=True)])
         sigma = np.sqrt(self.sd ** 2 + lab_err ** 2)
         return ((lab - self.meas) / sigma).reshape(1, -1), pred, err
+
+    def noise(self, pred, err):
+        """The model's noise (not its accuracy) in units of each residual's spread."""
+        acc = self.p.accuracy * pred
+        se = np.sqrt(np.maximum(err ** 2 - acc ** 2, 0.0))
+        lab_se = np.array([_lab_spread(self.p, p, e) for p, e in zip(pred, se, strict=True)])
+        lab_err = np.array([_model_lab_err(self.p, p, e) for p, e in zip(pred, err, strict=True)])
+        return (lab_se / np.sqrt(self.sd ** 2 + lab_err ** 2)).reshape(1, -1)
 
 
 # --- Levenberg–Marquardt over independent blocks -------------------------------------------
@@ -349,6 +259,8 @@ def _jacobian(obj, theta, r0, step, lo, hi):
 
 def _lm(obj, theta, step, iterations, lo, hi, final_jacobian=True):
     """Block Levenberg–Marquardt; returns theta, residuals, prediction, error, Jacobian."""
+    if getattr(obj, "pen", None) is not None:  # the bands coupled by smoothness
+        return readings_smooth.lm(obj, theta, step, iterations, lo, hi, obj.pen, _jacobian)
     r, pred, err = obj.residuals(theta)
     cost = np.sum(r * r, axis=1)
     lam = np.full(theta.shape[0], 1e-2)
@@ -392,15 +304,98 @@ def _start(form, bands):
     return np.array([[math.log(0.05), 0.0, 0.0, math.log(5.0), 1.0]])
 
 
+def _fit_table(prob: Problem, wrap, theta, lo, hi, form, iterations):
+    """The ``mc`` fit from the Kubelka–Munk fit ``theta``: on the table, with defect
+    corrections verified by the model itself (module doc)."""
+    mua0, mus0 = wrap(prob).coefficients(theta)
+    span_a = (max(math.log(float(np.min(mua0))) - TABLE_SPAN["mua"][0], LOG_BOUNDS[0]),
+              min(math.log(float(np.max(mua0))) + TABLE_SPAN["mua"][1], LOG_BOUNDS[1]))
+    span_s = (max(math.log(float(np.min(mus0))) - TABLE_SPAN["mus"][0], LOG_BOUNDS[0]),
+              min(math.log(float(np.max(mus0))) + TABLE_SPAN["mus"][1], LOG_BOUNDS[1]))
+    prob.build_table(span_a, span_s, LAYERED_TABLE_NODES if prob.layered else TABLE_NODES)
+    obj = wrap(prob)
+    if form == "spectral":
+        lo[:, 0], hi[:, 0] = span_a
+        lo[:, 1], hi[:, 1] = span_s
+        theta = np.clip(theta, lo, hi)
+    its = DEFAULT_ITERATIONS["table"] if iterations is None else iterations
+    best = None
+    for _ in range(CORRECTIONS + 1):
+        theta, r_t, pred_t, err_t, jac = _lm(obj, theta, TABLE_STEP, its, lo, hi)
+        prob.model = "mc"  # the reading at the fit, through the instrument
+        r, pred, err = obj.residuals(theta)
+        prob.model = "table"
+        # keep the best verified iterate, per block (band) where blocks are independent:
+        # the corrections may oscillate within the Monte Carlo noise
+        cost = np.sum(r * r, axis=1)
+        total = np.sum(cost) + (np.sum((obj.pen @ theta.ravel()) ** 2)
+                                if getattr(obj, "pen", None) is not None else 0.0)
+        if best is None:
+            best = [theta.copy(), r.copy(), pred.copy(), err.copy(), jac.copy(), cost, total]
+        else:
+            win = cost < best[5]
+            if getattr(obj, "pen", None) is not None:  # coupled bands: the whole fit
+                pen_cost = np.sum((obj.pen @ theta.ravel()) ** 2)
+                win = np.full(cost.shape, np.sum(cost) + pen_cost < best[6])
+            mask = win[None, :] if form == "spectral" else win[0]
+            best = [np.where(win[:, None], theta, best[0]), np.where(win[:, None], r, best[1]),
+                    np.where(mask, pred, best[2]), np.where(mask, err, best[3]),
+                    np.where(win[:, None, None], jac, best[4]), np.where(win, cost, best[5]),
+                    min(total, best[6])]
+        # with the layered solver: the table agrees with the model at the fit within a small
+        # part of every residual's spread, or within what the rim corrections' noise in
+        # both resolves, so a further correction would move the fit by less than that (the
+        # walks' tables are smoothed through their noise: they always correct)
+        noise = obj.noise(pred, err) * NOISE_SPAN
+        if prob.layered and np.all(np.abs(r - r_t) < DEFECT_TOLERANCE + noise):
+            break
+        # defect correction: the table's error at the fit moves the next fit's target
+        prob.defect = prob.defect + (pred - pred_t)
+    return (*best[:5], lo, hi, (span_a, span_s))
+
+
+def _edge_note(theta, lo, hi, bands, span_a) -> str:
+    """A warning for bands whose fit sits at the table's edge (empty where none does)."""
+    low_mua, edge = [], []
+    for i in range(len(bands)):
+        at_lo, at_hi = np.isclose(theta[i], lo[i]), np.isclose(theta[i], hi[i])
+        if at_lo[0] and not (at_lo[1] or np.any(at_hi)):
+            low_mua.append(i)  # absorption below what the readings resolve
+        elif np.any(at_lo) or np.any(at_hi):
+            edge.append(i)
+    notes = []
+    if low_mua:
+        notes.append(f"μa is below what the readings resolve at {len(low_mua)} band(s) "
+                     f"({', '.join(f'{bands[i]:g}' for i in low_mua[:5])} nm): at most "
+                     f"{math.exp(span_a[0]):.2g} /mm there (the value written is that bound)")
+    if edge:
+        notes.append(f"the fit reached the edge of its table at {len(edge)} band(s) "
+                     f"({', '.join(f'{bands[i]:g}' for i in edge[:5])} nm): the readings "
+                     "may lie outside what g and n allow")
+    return "; ".join(notes)
+
+
 def fit(readings: Readings, instrument, g: float | None = None, n: float | None = None,
         model: str = "mc", photons: int = DEFAULT_PHOTONS, seed: int = 1,
-        iterations: int | None = None) -> ReadingsFit:
-    """Fit a material to ``readings`` read by ``instrument`` (module doc)."""
+        iterations: int | None = None, solver: str = DEFAULT_SOLVER,
+        smooth: float = 0.0) -> ReadingsFit:
+    """Fit a material to ``readings`` read by ``instrument`` (module doc); ``solver`` is how
+    the ``mc`` model reads (:data:`SOLVERS`); ``smooth`` > 0 weighs a second-difference
+    penalty across the bands of a spectral fit (:mod:`readings_smooth`)."""
     from dentalux import instrument as instruments
 
     if model not in MODELS:
         raise ValueError(f"--model = {model!r}: allowed {', '.join(MODELS)}")
+    if solver not in SOLVERS:
+        raise ValueError(f"--solver = {solver!r}: allowed {', '.join(SOLVERS)}")
+    if not (math.isfinite(smooth) and smooth >= 0):
+        raise ValueError(f"--smooth = {smooth!r}: a weight >= 0")
+    if smooth and readings.form != "spectral":
+        raise ValueError("--smooth: the readings are CIELAB only, fitted through a smooth "
+                         "spectrum already; --smooth is for spectral readings")
     inst = instruments.get(instrument)
+    if model == "mc":  # refuses 'layered' through an oblique beam before any work
+        layered = engine.use_layered(inst, solver)
     assumed = {}
     if g is None:
         g, assumed["g"] = ASSUMED_G, (f"assumed: {ASSUMED_G} (typical of filled resins and "
@@ -419,9 +414,10 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
     start = time.perf_counter()
     form = readings.form
     bands = readings.wavelength_nm if form == "spectral" else list(LAB_BANDS)
-    wrap = _Spectral if form == "spectral" else _Lab
+    pen = readings_smooth.penalty(bands, 2, smooth) if smooth else None
+    wrap = (lambda p: _Spectral(p, pen)) if form == "spectral" else _Lab
     # Kubelka–Munk first: the baseline, and the start of the Monte Carlo fit
-    km = _Problem(readings, inst, g, n, "km", photons, seed, bands)
+    km = Problem(readings, inst, g, n, "km", photons, seed, bands)
     obj = wrap(km)
     theta = _start(form, bands)
     lo, hi = _bounds(theta.shape, form)
@@ -430,67 +426,15 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
     prob = km
     edge_note = ""
     if model == "mc":
-        used = {row.backing for row in readings.rows if isinstance(row.backing, str)}
-        spectral_backing = [b for b in used if isinstance(getattr(inst, f"backing_{b}"), tuple)]
-        if spectral_backing:  # the table reads every node under one backing value
-            raise ValueError(f"--model mc: the instrument {inst.name}'s {spectral_backing[0]} "
-                             "backing is a spectrum; the fit's table needs one reflectance "
-                             "per backing: give the backing as a number in the readings file")
-        prob = _Problem(readings, inst, g, n, "mc", photons, seed, bands)
-        mua0, mus0 = obj.coefficients(theta)
-        span_a = (max(math.log(float(np.min(mua0))) - TABLE_SPAN["mua"][0], LOG_BOUNDS[0]),
-                  min(math.log(float(np.max(mua0))) + TABLE_SPAN["mua"][1], LOG_BOUNDS[1]))
-        span_s = (max(math.log(float(np.min(mus0))) - TABLE_SPAN["mus"][0], LOG_BOUNDS[0]),
-                  min(math.log(float(np.max(mus0))) + TABLE_SPAN["mus"][1], LOG_BOUNDS[1]))
-        prob.build_table(span_a, span_s, TABLE_NODES)
-        obj = wrap(prob)
-        if form == "spectral":
-            lo[:, 0], hi[:, 0] = span_a
-            lo[:, 1], hi[:, 1] = span_s
-            theta = np.clip(theta, lo, hi)
-        its = DEFAULT_ITERATIONS["table"] if iterations is None else iterations
-        best = None
-        for _ in range(CORRECTIONS + 1):
-            theta, r, pred_t, err_t, jac = _lm(obj, theta, TABLE_STEP, its, lo, hi)
-            prob.model = "mc"  # the Monte Carlo reading at the fit, through the instrument
-            r, pred, err = obj.residuals(theta)
-            prob.model = "table"
-            # keep the best Monte Carlo-verified iterate, per block (band) where blocks are
-            # independent: the corrections may oscillate within the noise
-            cost = np.sum(r * r, axis=1)
-            if best is None:
-                best = [theta.copy(), r.copy(), pred.copy(), err.copy(), jac.copy(), cost]
-            else:
-                win = cost < best[5]
-                mask = win[None, :] if form == "spectral" else win[0]
-                best = [np.where(win[:, None], theta, best[0]), np.where(win[:, None], r, best[1]),
-                        np.where(mask, pred, best[2]), np.where(mask, err, best[3]),
-                        np.where(win[:, None, None], jac, best[4]), np.minimum(cost, best[5])]
-            # defect correction: the table's error at the fit moves the next fit's target
-            prob.defect = prob.defect + (pred - pred_t)
-        theta, r, pred, err, jac = best[:5]
+        prob = Problem(readings, inst, g, n, "mc", photons, seed, bands, solver)
+        theta, r, pred, err, jac, lo, hi, spans = _fit_table(prob, wrap, theta, lo, hi, form,
+                                                             iterations)
         evaluations = prob.mc_calls
-        low_mua, edge = [], []
-        if form == "spectral":
-            for i in range(len(bands)):
-                at_lo, at_hi = np.isclose(theta[i], lo[i]), np.isclose(theta[i], hi[i])
-                if at_lo[0] and not (at_lo[1] or np.any(at_hi)):
-                    low_mua.append(i)  # absorption below what the readings resolve
-                elif np.any(at_lo) or np.any(at_hi):
-                    edge.append(i)
-        notes = []
-        if low_mua:
-            notes.append(f"μa is below what the readings resolve at {len(low_mua)} band(s) "
-                         f"({', '.join(f'{bands[i]:g}' for i in low_mua[:5])} nm): at most "
-                         f"{math.exp(span_a[0]):.2g} /mm there (the value written is that bound)")
-        if edge:
-            notes.append(f"the fit reached the edge of its table at {len(edge)} band(s) "
-                         f"({', '.join(f'{bands[i]:g}' for i in edge[:5])} nm): the readings "
-                         "may lie outside what g and n allow")
-        edge_note = "; ".join(notes)
-    # uncertainty of each parameter: (J^T J)^-1 with residuals in units of their sigma
+        edge_note = _edge_note(theta, lo, hi, bands, spans[0]) if form == "spectral" else ""
+    # uncertainty of each parameter: (J^T J)^-1 with residuals in units of their sigma (with
+    # smoothing, the penalised problem's); singular: the readings alone do not pin a band
     jtj = np.einsum("bmi,bmj->bij", jac, jac)
-    cov = np.linalg.pinv(jtj)
+    cov = (np.linalg.pinv(jtj) if pen is None else readings_smooth.block_covariance(jac, pen))
     sd = np.sqrt(np.clip(np.diagonal(cov, axis1=1, axis2=2), 0, None))
     singular = np.linalg.cond(jtj) > 1e12
     sd = np.where(singular[:, None], np.inf, sd)
@@ -542,7 +486,7 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
     residuals = []
     noise = []
     for i, row in enumerate(readings.rows):
-        lab_err = _lab_spread(prob, pred[i], err[i])
+        lab_err = _model_lab_err(prob, pred[i], err[i])
         noise.append(delta_e00_scale(pred_lab[i], lab_err) if np.any(lab_err) else 0.0)
         if form == "lab":
             sd_lab = np.asarray(row.sd_lab if row.sd_lab is not None else (0.0,) * 3)
@@ -550,7 +494,9 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
             sd = row.sd_spectrum if row.sd_spectrum is not None else np.zeros(len(bands))
             sd_lab = _lab_spread(prob, row.spectrum, sd)
         spread = delta_e00_scale(meas_lab[i], sd_lab) if np.any(sd_lab) else 0.0
-        residuals.append({"thickness_mm": row.thickness_mm, "backing": row.backing,
+        residuals.append({"thickness_mm": row.thickness_mm,
+                          "backing": row.backing_label if isinstance(row.backing, BackingFile)
+                          else row.backing,
                           "delta_e00": float(de[i]), "line": row.line,
                           "measured_lab": [float(x) for x in meas_lab[i]],
                           "predicted_lab": [float(x) for x in pred_lab[i]],
@@ -580,6 +526,8 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
                        seconds=time.perf_counter() - start, evaluations=evaluations,
                        photons=photons if model == "mc" else 0, seed=seed,
                        cpu_seconds=prob.cpu_seconds,
+                       solver=("layered" if layered else "monte-carlo") if model == "mc" else "",
+                       smooth=float(smooth),
                        warnings=warnings, mc_stderr_de00=float(np.max(noise)))
 
 
@@ -599,18 +547,28 @@ def material_doc(res: ReadingsFit, readings: Readings, inst, name: str,
             "CIELAB only, through a smooth five-parameter spectrum (" + ", ".join(
                 f"{p} {'pinned' if res.pinned['pinned'][p] else 'NOT pinned'}"
                 for p in LAB_PARAMS) + ")")
-    model = ("Monte Carlo through the instrument model (dentalux.dental.read, edge loss "
-             f"included; {res.photons} photons per band, seed {res.seed}, common random "
-             f"numbers; Monte Carlo noise up to {res.mc_stderr_de00:.2f} ΔE00 per reading)"
-             if res.model == "mc" else
-             "Kubelka-Munk with the Saunderson correction (no edge loss; K = 2 mua, "
-             "S = 0.75 mus (1 - g))")
+    if res.solver == "layered":
+        model = ("the layered solver through the instrument model (dentalux.dental.read, "
+                 f"solver 'layered', edge loss included; {res.photons} photons per band for "
+                 f"the rim correction, seed {res.seed}; model error, the rim correction's "
+                 f"noise and the solver's stated accuracy {ACCURACY:.1%}, up to "
+                 f"{res.mc_stderr_de00:.2f} ΔE00 per reading)")
+    elif res.model == "mc":
+        model = ("Monte Carlo through the instrument model (dentalux.dental.read, edge loss "
+                 f"included; {res.photons} photons per band, seed {res.seed}, common random "
+                 f"numbers; Monte Carlo noise up to {res.mc_stderr_de00:.2f} ΔE00 per reading)")
+    else:
+        model = ("Kubelka-Munk with the Saunderson correction (no edge loss; K = 2 mua, "
+                 "S = 0.75 mus (1 - g))")
     resid = [f"{r['thickness_mm']:g} mm over {r['backing']}: {r['delta_e00']:.3f} ΔE00"
              for r in res.residuals]
     notes = (f"Fitted to {len(readings.rows)} readings ({form}) by {model}. Identifiable: "
              f"{'yes' if res.identifiable else 'NO'} ({res.identifiability}). mua_ci and "
              "mus_ci are 95 % intervals from the readings' sd (or the default "
-             f"{DEFAULT_SD[readings.form]}) and the Monte Carlo error.")
+             f"{DEFAULT_SD[readings.form]}) and the model's error (its noise and, with the "
+             "layered solver, its stated accuracy)."
+             + (f" Smoothed across the bands (weight {res.smooth:g}): the intervals include "
+                "that assumption." if res.smooth else ""))
     return {"materials": {name: {
         "description": f"fitted from the readings {Path(readings.path).name} read with "
                        f"{inst.name}",
@@ -628,6 +586,7 @@ def material_doc(res: ReadingsFit, readings: Readings, inst, name: str,
             "source": f"readings file {Path(readings.path).name} (sha256 {readings.sha256}), "
                       f"read with the instrument {inst.name}",
             "model": res.model,
+            **({"solver": res.solver} if res.solver else {}),
             "instrument": inst.name,
             "readings_sha256": readings.sha256,
             "date": date or _dt.date.today().isoformat(),
