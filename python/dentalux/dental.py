@@ -317,9 +317,7 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     }
     if inst.is_infinite:
         spectra_out.update({k: spectra.extra[k] for k in reading.engine.ADDING_INPUTS})
-        # the layered solver's adding inputs carry no noise, and no _stderr entries
-        spectra_out.update({f"{k}_stderr": spectra.extra.get(f"{k}_stderr",
-                                                             np.zeros_like(spectra.extra[k]))
+        spectra_out.update({f"{k}_stderr": spectra.extra[f"{k}_stderr"]
                             for k in reading.engine.ADDING_INPUTS})
         edge_loss = {"black": 0.0, "white": 0.0}
     else:

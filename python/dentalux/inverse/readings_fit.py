@@ -71,7 +71,7 @@ MODELS = ("mc", "km")
 #: how the ``mc`` model reads: the solvers of :func:`dentalux.dental.read`; 'auto' is the
 #: layered solver wherever the instrument's beam is normal, else the Monte Carlo walks
 SOLVERS = engine.SOLVERS
-DEFAULT_SOLVER = "auto"
+DEFAULT_SOLVER = engine.DEFAULT_SOLVER
 #: g and n when the user gives none: typical of resin composites and glass ceramics
 #: (n 1.50-1.55; g of filled resins 0.6-0.8 in the inverse-adding-doubling literature)
 ASSUMED_G, ASSUMED_N = 0.6, 1.5
