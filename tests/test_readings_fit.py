@@ -11,23 +11,12 @@ from dentalux import dental, instrument, readings
 from dentalux.color import delta_e00
 from dentalux.inverse import readings_fit as rf
 from dentalux.reading.layered.stack import ACCURACY
+from dentalux.testing import STAND_IN_COMPOSITE
 
 INST = "contact-probe-3mm"
 BANDS = [450.0, 500.0, 550.0, 600.0, 650.0]
 # a material unknown to the fit (constant g, as the fit assumes): a composite-like spectrum
-MATERIAL = """[materials.comp]
-extrapolate = true
-description = "test composite"
-wavelength_nm = [400.0, 450.0, 500.0, 550.0, 600.0, 650.0, 700.0]
-mua = [0.6, 0.3, 0.12, 0.05, 0.03, 0.02, 0.015]
-mus = [14.0, 12.0, 11.0, 10.0, 9.0, 8.5, 8.0]
-g = [0.8, 0.8, 0.8, 0.8, 0.8, 0.8, 0.8]
-fd = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-n = [1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5]
-[materials.comp.provenance]
-kind = "derived"
-source = "test"
-"""
+MATERIAL = STAND_IN_COMPOSITE
 
 
 run = run_main  # the command line in process: (exit code, stdout, stderr)

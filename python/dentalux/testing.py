@@ -9,6 +9,22 @@ import numpy as np
 
 from dentalux.distributed import Task
 
+#: a composite-like material unknown to a fit (constant g, as the readings fit assumes), for
+#: round trips of ``fit --readings``: its tests and benchmarks/fit_readings.py
+STAND_IN_COMPOSITE = """[materials.comp]
+extrapolate = true
+description = "a stand-in composite (made up for round trips)"
+wavelength_nm = [400.0, 450.0, 500.0, 550.0, 600.0, 650.0, 700.0]
+mua = [0.6, 0.3, 0.12, 0.05, 0.03, 0.02, 0.015]
+mus = [14.0, 12.0, 11.0, 10.0, 9.0, 8.5, 8.0]
+g = [0.8, 0.8, 0.8, 0.8, 0.8, 0.8, 0.8]
+fd = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+n = [1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5]
+[materials.comp.provenance]
+kind = "derived"
+source = "made up for round trips of the readings fit"
+"""
+
 
 def synthetic_task(task: Task) -> tuple[np.ndarray, dict]:
     """A deterministic stand-in for a render task: noise seeded by (seed, band, pass).
