@@ -25,16 +25,19 @@ ORDER = 16
 K_NODES = (0.0, 0.1, 0.25, 0.5, 0.8, 1.2, 1.8, 2.7, 4.0, 6.0, 9.0, 14.0, 21.0, 32.0)
 #: azimuthal modes by spatial frequency: (k up to [1/mm], modes). The lateral term couples
 #: the modes in proportion to k / mu_t; where k is large the response is small and needs
-#: fewer of them again
-MODES_BY_K = ((0.0, 1), (0.3, 3), (1.5, 4), (12.0, 6), (np.inf, 4))
+#: fewer of them again. The truncation error alternates in sign between odd and even counts:
+#: against 4 more modes everywhere (benchmarks/layered_settings.py), 5 modes at 1.8-9 /mm
+#: read within 0.06 % where 6 read within 0.53 %, at 25 % less CPU
+MODES_BY_K = ((0.0, 1), (0.3, 3), (1.5, 4), (12.0, 5), (np.inf, 4))
 
 #: whether the radiance in a detector cone gets the single-scattering correction (single.py)
 SINGLE_SCATTER = True
 
 #: the solver's accuracy, relative to a reading: its discretisation against a converged
-#: solution (more nodes, modes and spatial frequencies) was at most 0.16 % on discs and
-#: 0.4 % on a fibre probe's ring, and it agreed with 2 M-photon slab walks within their
-#: noise (0.1-0.3 %) on 16 cases (docs/notes/2026-12-07-layered-solver.md)
+#: solution (more nodes, four more modes, twice the spatial frequencies) is at most 0.1 % on
+#: discs (benchmarks/layered_settings.py) and was 0.4 % on a fibre probe's ring, and it
+#: agreed with 2 M-photon slab walks within their noise (0.1-0.3 %) on 16 cases
+#: (docs/notes/2026-12-07-layered-solver.md)
 ACCURACY = 0.005
 
 FIELDS = ("r_cone", "r_all", "into_backing", "q", "e_cone", "e_all")
