@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from dentalux import inputs
+from dentalux.materials import MAX_COEFFICIENT, MAX_INDEX  # a tile's coefficients: a material's
 
 #: the keys of the table; ``material`` or the four coefficients (``fd`` optional)
 COEFFICIENTS = ("mua_per_mm", "mus_per_mm", "g", "n")
@@ -29,9 +30,6 @@ KEYS = ("material", *COEFFICIENTS, "fd", "thickness_mm", "reflectance", "backing
         "diameter_mm", "provenance")
 #: a tile's thickness [mm]: a film to a block (nothing a tip is calibrated on is thicker)
 THICKNESS_RANGE_MM = (1e-6, 1e3)
-#: the coefficient ranges of dentalux.materials (MAX_COEFFICIENT, MAX_INDEX)
-MAX_COEFFICIENT = 1e6
-MAX_INDEX = 10.0
 
 
 @dataclass(frozen=True)

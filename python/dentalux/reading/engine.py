@@ -30,7 +30,7 @@ from threadpoolctl import threadpool_limits
 
 from dentalux import _core, limits
 from dentalux.progress import bar
-from dentalux.reading.spectra import ReadSpectra
+from dentalux.reading.spectra import ReadSpectra, replicate_variance
 from dentalux.slab import Layer, parse_incidence, simulate
 
 # the core's tallies of a window run, in its order (instrument.rs WINDOW_KEYS)
@@ -347,8 +347,7 @@ def _spectra(sums, t_sums, n_rep, inst, rb_black, rb_white, start_cpu, start, ph
     weights = n_rep / n_rep.sum()
     reps = per_rep / n_rep[:, None, None]
     values = np.tensordot(weights, reps, axes=([0], [0]))
-    r = len(weights)
-    var = np.tensordot(weights**2, (reps - values) ** 2, axes=([0], [0])) * r / max(r - 1, 1)
+    var = replicate_variance(weights, reps - values)
     edge = np.tensordot(weights, loss / n_rep[:, None, None], axes=([0], [0]))
     return ReadSpectra(
         wavelengths_nm=np.zeros(0), values=values, stderr=np.sqrt(var), edge_loss=edge,

@@ -25,6 +25,13 @@ CHANNELS = ("over_black", "over_white", "transmitted")
 STEP = 1e-6
 
 
+def replicate_variance(weights: np.ndarray, deviations: np.ndarray) -> np.ndarray:
+    """Variance of the weighted mean of replicates from their deviations about it (R, ...),
+    weights (R,) summing to one, with the R / (R - 1) correction for the estimated mean."""
+    r = len(weights)
+    return np.tensordot(weights**2, deviations**2, axes=([0], [0])) * r / max(r - 1, 1)
+
+
 @dataclass
 class ReadSpectra:
     """Readings (channels × bands) of one specimen, with their uncertainty carriers."""
@@ -58,13 +65,11 @@ class ReadSpectra:
             out = fn(batch)
             dev = (self.replicates - base).reshape(len(self.replicates), -1)  # (R, n_in)
             w = self.replicate_weights
-            r = len(w)
             stderr = {}
             for key, value in out.items():
                 grad = (value[1:] - value[0]) / STEP  # (n_in,) or (n_in, 3)
                 z = np.tensordot(dev, grad, axes=([1], [0]))  # (R,) or (R, 3)
-                var = np.tensordot(w**2, z**2, axes=([0], [0])) * r / max(r - 1, 1)
-                stderr[key] = np.sqrt(var)
+                stderr[key] = np.sqrt(replicate_variance(w, z))
             return {k: v[0] for k, v in out.items()}, stderr
         base = self.inputs
         n_in = base.size

@@ -10,14 +10,15 @@ The tile is read by the specimen's solver. The layered solver ('layered', or 'au
 normal beam) reads an unbounded tile with no noise at all. A Monte Carlo tile has its own
 seed, and its replicates are paired with the specimen's, so the tile's standard error reaches
 every number computed from the reading (:meth:`dentalux.reading.spectra.ReadSpectra.propagate`).
-The solver is not switched for the tile: the layered solver reads a tile whose light hardly
-spreads 0.65 % low through equal 3 mm discs (docs/instruments.md), and a walk has no such
-bias.
+The solver is not switched for the tile, so that the tile and the specimen are read the
+same way and the ratio compares like with like.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from dentalux.reading.spectra import replicate_variance
 
 # the tile's walks use seed + this (mod 2^64): independent of the specimen's photons
 SEED_OFFSET = 104_729
@@ -87,8 +88,7 @@ def calibrate(out, wl, inst, rb_black, photons: int, seed: int, estimator: str, 
         # first order in the replicates' deviations: S_r/T - S (T_r - T)/T^2, times cert
         reps[:, c] = cert * (s_reps[:, c] / t_bar - out.values[c] * dev_t / t_bar**2)
         values[c] = cert * out.values[c] / t_bar
-    r = len(w)
-    var = np.tensordot(w**2, (reps - values) ** 2, axes=([0], [0])) * r / max(r - 1, 1)
+    var = replicate_variance(w, reps - values)
     out.values, out.replicates, out.replicate_weights = values, reps, w
     out.stderr = np.sqrt(var)
     out.photons += tile.photons
