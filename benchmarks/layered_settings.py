@@ -61,21 +61,17 @@ def readings(parts, inst, wl, settings) -> tuple[np.ndarray, float]:
     """(3, bands) over black, over white and transmitted, and the solve's CPU-s."""
     bs = engine.stacks([(materials.get(m), t) for m, t in parts], wl)
     a0, a, b0, b, _, _, cone = inst.window(0.0)
-    saved = stack.MODES_BY_K
-    stack.MODES_BY_K = settings["modes"]
     start = time.process_time()
-    try:
-        sums = []
-        for indices, members in engine.by_indices(bs).items():
-            group = [bs[i] for i in members]
-            res = layered.responses(group, 1.0, 1.0, cone, ks=settings["ks"],
-                                    per_interval=settings["per_interval"])
-            local = layered.local_parts(group, 1.0, 1.0)
-            first = float(engine._core.fresnel_reflectance([1.0], 1.0, indices[0])[0])
-            sums.append(layered.order_sums(res, local, first, (a0, a), (b0, b),
-                                           engine.MAX_ORDER, engine.WINDOW_KEYS))
-    finally:
-        stack.MODES_BY_K = saved
+    sums = []
+    for indices, members in engine.by_indices(bs).items():
+        group = [bs[i] for i in members]
+        res = layered.responses(group, 1.0, 1.0, cone, ks=settings["ks"],
+                                modes_by_k=settings["modes"],
+                                per_interval=settings["per_interval"])
+        local = layered.local_parts(group, 1.0, 1.0)
+        first = float(engine._core.fresnel_reflectance([1.0], 1.0, indices[0])[0])
+        sums.append(layered.order_sums(res, local, first, (a0, a), (b0, b),
+                                       engine.MAX_ORDER, engine.WINDOW_KEYS))
     cpu = time.process_time() - start
     s = np.concatenate(sums)[:, None]  # (bands, 1 replicate, orders, keys)
     key = "viewed_cone_reflectance" if inst.spec.cone_deg else "viewed_reflectance"

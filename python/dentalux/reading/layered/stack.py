@@ -108,9 +108,9 @@ def response(band_stacks, ks, n_above: float, n_below: float, cone_deg, modes: i
                     e_all=leave @ flux_top)
 
 
-def modes_for(k: float) -> int:
-    """Azimuthal modes solved at spatial frequency k (MODES_BY_K)."""
-    return next(m for k_max, m in MODES_BY_K if k <= k_max)
+def modes_for(k: float, schedule=MODES_BY_K) -> int:
+    """Azimuthal modes solved at spatial frequency k (``schedule``: as MODES_BY_K)."""
+    return next(m for k_max, m in schedule if k <= k_max)
 
 
 class Stopped(Exception):
@@ -118,14 +118,15 @@ class Stopped(Exception):
 
 
 def responses(band_stacks, n_above: float, n_below: float, cone_deg, ks=K_NODES,
-              stop=None, **settings) -> Response:
-    """:func:`response` at every spatial frequency of ``ks``, each with the modes it needs,
-    solved in groups of equal modes; ``stop()``, asked before each group, ends it early
-    (:class:`Stopped`)."""
+              stop=None, modes_by_k=MODES_BY_K, single_scatter: bool = SINGLE_SCATTER,
+              **settings) -> Response:
+    """:func:`response` at every spatial frequency of ``ks``, each with the modes
+    ``modes_by_k`` gives it, solved in groups of equal modes; ``stop()``, asked before each
+    group, ends it early (:class:`Stopped`); ``single_scatter``: the cone's correction."""
     ks = np.asarray(ks, float)
     groups: dict[int, list[int]] = {}
     for i, k in enumerate(ks):
-        groups.setdefault(modes_for(k), []).append(i)
+        groups.setdefault(modes_for(k, modes_by_k), []).append(i)
     out = {f: np.zeros((len(band_stacks), len(ks))) for f in FIELDS}
     for modes, idx in groups.items():
         if stop is not None and stop():
@@ -133,7 +134,7 @@ def responses(band_stacks, n_above: float, n_below: float, cone_deg, ks=K_NODES,
         res = response(band_stacks, ks[idx], n_above, n_below, cone_deg, modes, **settings)
         for f in FIELDS:
             out[f][:, idx] = getattr(res, f)
-    if cone_deg is not None and SINGLE_SCATTER:
+    if cone_deg is not None and single_scatter:
         out["r_cone"] += single.correction(band_stacks, ks, n_above, cone_deg,
                                            settings.get("order", ORDER))
     return Response(k=ks, **out)
