@@ -21,8 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from dentalux import inputs
-from dentalux.materials import MAX_COEFFICIENT, MAX_INDEX  # a tile's coefficients: a material's
+from dentalux import inputs, materials
 
 #: the keys of the table; ``material`` or the four coefficients (``fd`` optional)
 COEFFICIENTS = ("mua_per_mm", "mus_per_mm", "g", "n")
@@ -77,8 +76,6 @@ class WhiteReference:
 def _material(value, key: str, base: Path | None):
     """A library material name or a TOML file (relative to ``base``) -> (the name or the
     file's resolved path, Material): two files of one name in two folders stay apart."""
-    from dentalux import materials
-
     text = inputs.text(value, key)
     if text.endswith(".toml"):
         path = Path(text)
@@ -125,13 +122,13 @@ def parse(table, key: str, base: Path | None = None) -> WhiteReference:
     else:
         c = {k: table[k] for k in COEFFICIENTS}
         coefficients = (
-            inputs.number(c["mua_per_mm"], f"{key}.mua_per_mm", 0.0, MAX_COEFFICIENT,
+            inputs.number(c["mua_per_mm"], f"{key}.mua_per_mm", 0.0, materials.MAX_COEFFICIENT,
                           unit="1/mm"),
-            inputs.number(c["mus_per_mm"], f"{key}.mus_per_mm", 0.0, MAX_COEFFICIENT,
+            inputs.number(c["mus_per_mm"], f"{key}.mus_per_mm", 0.0, materials.MAX_COEFFICIENT,
                           unit="1/mm"),
             inputs.number(c["g"], f"{key}.g", -1.0, 1.0, lo_open=True, hi_open=True),
             inputs.number(table.get("fd", 0.0), f"{key}.fd", 0.0, 1.0),
-            inputs.number(c["n"], f"{key}.n", 1.0, MAX_INDEX))
+            inputs.number(c["n"], f"{key}.n", 1.0, materials.MAX_INDEX))
     if "fd" in table and material is not None:
         raise ValueError(f"{key}.fd: only with the coefficients (a material has its own fd)")
     backing = None if "backing" not in table else _backing(f"{key}.backing", table["backing"])
