@@ -109,16 +109,18 @@ def test_target_carries_its_instrument():
 
 
 def test_design_target_instrument_cli(capsys, tmp_path):
+    other = "contact-probe-3mm"  # a target read by another instrument than the default
+    assert other != instrument.DEFAULT
     args = ["design", "--target", "lab:72,1.5,16", "--layer", "enamel:0.3-0.9",
             "--substrate", "none", "--bands", "450,550,650", "--photons", "300",
             "--designs", "1"]
-    assert _main([*args, "--target-instrument", "45-0", "--json"]) == 0
+    assert _main([*args, "--target-instrument", other, "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["target"]["instrument"] == "45-0"
+    assert out["target"]["instrument"] == other
     assert out["instrument"]["name"] == instrument.DEFAULT
     assert _main([*args, "--json"]) == 0  # default: the design's own instrument
     assert json.loads(capsys.readouterr().out)["target"]["instrument"] == instrument.DEFAULT
-    assert _main([*args, "--target-instrument", "45-0"]) == 0
+    assert _main([*args, "--target-instrument", other]) == 0
     assert "different instruments" in " ".join(capsys.readouterr().out.split())
     assert _main([*args, "--target-instrument", "no-such-probe", "--json"]) == 2
     captured = capsys.readouterr()

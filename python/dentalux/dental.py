@@ -270,7 +270,10 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
                   op_backing=op_backing, reconstruction=reconstruction, threads=threads,
                   walks=walks, solver=solver)
         photons, plan = photons_for_precision(specimen, precision, **kw)
-        m = read(specimen, photons=photons, progress=progress, **kw)
+        # a reading without a Monte Carlo part (no rim walk) is its own pilot
+        m = plan.pop("reading") if plan["noise_free"] else read(
+            specimen, photons=photons, progress=progress, **kw)
+        plan.pop("reading", None)
         m.precision = {**plan, "achieved": reading_precision(m)}
         return m
     if isinstance(specimen, (str, bytes)) or not hasattr(specimen, "__iter__"):
@@ -389,15 +392,22 @@ def photons_for_precision(specimen, precision, seed: int = 1, name: str = "preci
     over white) to ``precision``: a pilot reading of :data:`PILOT_PHOTONS` measures it, and
     the variance falls as 1/photons. A count over the slab ceiling or a run over
     :data:`dentalux.limits.MAX_READING_CPU_SECONDS` is refused before it starts, with the
-    estimate. Returns the count and the plan (pilot numbers and estimates)."""
+    estimate. Returns the count and the plan (pilot numbers and estimates); where the pilot
+    walked no photons (the layered solver on a laterally infinite specimen: no noise) the
+    plan says ``noise_free`` and carries the pilot as its ``reading``."""
     target = check_precision(precision, name)
     pilot = read(specimen, photons=PILOT_PHOTONS, seed=int(seed) + PILOT_SEED_OFFSET, **kw)
+    if pilot.photons == 0:
+        return PILOT_PHOTONS, {"requested": target, "noise_free": True, "pilot_photons": 0,
+                               "pilot_precision": 0.0, "photons_per_band": 0,
+                               "estimated_cpu_seconds": pilot.cpu_seconds, "reading": pilot}
     p0 = reading_precision(pilot)
     need = int(np.ceil(PILOT_PHOTONS * PRECISION_MARGIN * (p0 / target) ** 2))
     need = max(need, PILOT_PHOTONS)
     fixed = pilot.fixed_cpu_seconds
     cpu = fixed + (pilot.cpu_seconds - fixed) * need / PILOT_PHOTONS
-    plan = {"requested": target, "pilot_photons": PILOT_PHOTONS, "pilot_precision": p0,
+    plan = {"requested": target, "noise_free": False, "pilot_photons": PILOT_PHOTONS,
+            "pilot_precision": p0,
             "photons_per_band": need, "estimated_cpu_seconds": cpu}
     if need > limits.MAX_SLAB_PHOTONS or cpu > limits.MAX_READING_CPU_SECONDS:
         raise ValueError(

@@ -45,8 +45,9 @@ from dentalux import white_reference as tiles
 DATA = Path(__file__).parent / "data" / "instruments.toml"
 INFINITE = "infinite"
 # every reading, from the command line or the API, is through this preset unless told
-# otherwise (Yu et al. 2009's window)
-DEFAULT = "contact-probe-3mm"
+# otherwise: the only preset whose reading of the natural incisor falls inside its class's
+# published range (`dentalux instruments validate`; docs/instruments.md, "The default")
+DEFAULT = "45-0"
 # half-width of the 45 deg ring [deg]: CIE 15 keeps every ray within 8 deg of its beam axis
 RING_HALF_WIDTH = 8.0
 #: diameters an instrument may name [mm]: squares and overlap areas of discs stay well inside

@@ -124,7 +124,9 @@ def shade_command(
     photons_line = f"{how}, {m['cpu_seconds']:.1f} CPU-s"
     if "precision" in m:
         p = m["precision"]
-        photons_line += (f"; precision asked {p['requested']:g}, reached {p['achieved']:.3f} "
+        photons_line += (f"; precision asked {p['requested']:g}: the reading has no Monte "
+                         "Carlo noise" if p["noise_free"] else
+                         f"; precision asked {p['requested']:g}, reached {p['achieved']:.3f} "
                          f"ΔE00 ({p['photons_per_band']} photons per band)")
     table.caption = photons_line
     Console().print(table)
