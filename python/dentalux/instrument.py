@@ -9,7 +9,9 @@ uniformly over the lit disc, the backing lies under the specimen, and light is r
 where it leaves inside the window. Light that leaves elsewhere is the edge loss. The lit
 region and the window may be rings (``illuminated_inner_diameter_mm``,
 ``viewed_inner_diameter_mm``): a fibre-optic probe's illuminating ring around a central
-receiving bundle, or the reverse (docs/instruments.md, "A fibre-optic probe"). An optional
+receiving bundle, or the reverse (docs/instruments.md, "A fibre-optic probe"). A probe of
+separate fibres names them instead (``fibres`` and ``tip_diameter_mm``, :mod:`dentalux.fibres`):
+such a probe is read by the layered solver alone, on a laterally infinite specimen. An optional
 ``white_reference`` names the instrument's calibration tile, read through the same window, by
 which readings are divided instead of an ideal white (:mod:`dentalux.white_reference`).
 
@@ -39,6 +41,7 @@ from dataclasses import dataclass, field, replace
 from numbers import Real
 from pathlib import Path
 
+from dentalux import fibres as fibre_layout
 from dentalux import inputs
 from dentalux import white_reference as tiles
 
@@ -87,7 +90,8 @@ CLASSES = ("clinical-contact-probe", "benchtop-d8", "noncontact-45-0", "imaging"
            "idealised")
 KEYS = ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm", "backing_black",
         "backing_white", "contact_index", "specimen_diameter_mm",
-        "illuminated_inner_diameter_mm", "viewed_inner_diameter_mm", "white_reference")
+        "illuminated_inner_diameter_mm", "viewed_inner_diameter_mm", "white_reference",
+        "fibres")
 #: the inner diameters that make the lit region or the window a ring (annulus): 0 is a disc
 INNER_KEYS = ("illuminated_inner_diameter_mm", "viewed_inner_diameter_mm")
 
@@ -174,6 +178,9 @@ class Instrument:
     #: the calibration tile (:class:`dentalux.white_reference.WhiteReference` or its table);
     #: None divides by an ideal, non-penetrating white as before
     white_reference: object = None
+    #: a probe of separate fibres (:class:`dentalux.fibres.Layout`, or its table
+    #: {tip_diameter_mm, fibres}); None: the concentric lit region and window above
+    fibres: object = None
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name:
@@ -182,6 +189,8 @@ class Instrument:
             raise ValueError(f"geometry = {self.geometry!r}: allowed {', '.join(GEOMETRIES)}")
         if not isinstance(self.instrument_class, str) or self.instrument_class not in CLASSES:
             raise ValueError(f"class = {self.instrument_class!r}: allowed {', '.join(CLASSES)}")
+        if self.fibres is not None:
+            self._check_fibres()
         # only the built-in idealisation may have infinite areas (see is_infinite)
         infinite = self.name == INFINITE and self.geometry == "0-d"
         ill = _diameter("illuminated_diameter_mm", self.illuminated_diameter_mm, infinite)
@@ -230,6 +239,28 @@ class Instrument:
         if self.white_reference is not None and self.white_reference.diameter_mm is not None:
             tiles.instrument_for(self)  # a tile narrower than the window is refused here
 
+    def _check_fibres(self) -> None:
+        """Parse the layout; a fibre probe lights along the normal, has no rings and no rim
+        (the rim's correction is a slab walk, which cannot follow separate fibres); its
+        diameters are the tip's."""
+        layout = fibre_layout.parse(self.fibres, "fibres")
+        if GEOMETRIES[self.geometry].incidence != "normal":
+            allowed = [g for g, v in GEOMETRIES.items() if v.incidence == "normal"]
+            raise ValueError(f"geometry = {self.geometry!r}: a fibre probe lights along the "
+                             f"normal through its source fibres: allowed {', '.join(allowed)}")
+        if self.specimen_diameter_mm is not None:
+            raise ValueError(
+                f"specimen_diameter_mm = {self.specimen_diameter_mm!r}: a fibre probe is read "
+                "by the layered solver on a laterally infinite specimen (a rim's correction "
+                "is a slab walk, which cannot follow separate fibres): leave it out")
+        for key in INNER_KEYS:
+            if getattr(self, key) != 0.0:
+                raise ValueError(f"{key} = {getattr(self, key)!r}: a fibre probe's regions "
+                                 "are its fibres: leave it out (0)")
+        for key in ("illuminated_diameter_mm", "viewed_diameter_mm"):
+            object.__setattr__(self, key, layout.tip_diameter_mm)
+        object.__setattr__(self, "fibres", layout)
+
     @property
     def is_infinite(self) -> bool:
         """The laterally infinite disc read over infinite areas (the adding formula): the
@@ -239,7 +270,11 @@ class Instrument:
 
     @property
     def spec(self) -> Geometry:
-        return GEOMETRIES[self.geometry]
+        """The geometry; a fibre probe's receivers read into their acceptance cone."""
+        geometry = GEOMETRIES[self.geometry]
+        if self.fibres is not None and self.fibres.acceptance_deg is not None:
+            return replace(geometry, cone_deg=(0.0, self.fibres.acceptance_deg))
+        return geometry
 
     @property
     def lit_diameter_mm(self) -> float:
@@ -265,8 +300,13 @@ class Instrument:
         the reading, instead of (b/a)^2 of them for a small view in wide light.
         ``brute_force`` lights the lit disc and reads the window as the instrument does (for
         checks). Rings are lit and read as the instrument does (no swap): the normalisation
-        by an ideal white is not symmetric for them.
+        by an ideal white is not symmetric for them. A fibre probe has no such tuple (the
+        walk cannot follow its fibres): a ValueError.
         """
+        if self.fibres is not None:
+            raise ValueError(f"instrument {self.name!r} is a fibre probe: the slab walk "
+                             "cannot follow separate fibres; it is read by the layered "
+                             "solver (solver = 'layered' or 'auto')")
         spec = math.inf if self.specimen_diameter_mm is None else self.specimen_diameter_mm / 2
         a, b = self.lit_diameter_mm / 2, self.viewed_diameter_mm / 2
         if self.is_discs:
@@ -287,7 +327,12 @@ class Instrument:
         return self.white_reference is not None or self._white_overlap() > 0.0
 
     def _white_overlap(self) -> float:
-        """Lit area inside the window over the lit area (rings concentric at the centre)."""
+        """Lit area inside the window over the lit area (rings concentric at the centre; a
+        fibre probe's sources' power falling on its receivers)."""
+        if self.fibres is not None:
+            from dentalux.reading.layered.window import pairs_overlap
+
+            return pairs_overlap(self.fibres.pairs())
         a, b = self.lit_diameter_mm, self.viewed_diameter_mm
         a0, b0 = self.illuminated_inner_diameter_mm, self.viewed_inner_diameter_mm
         lo, hi = max(a0, b0), min(a, b)
@@ -297,9 +342,10 @@ class Instrument:
         """Power an ideal Lambertian white sends through the run's window, the reading's
         normaliser: for discs min(a, b)^2 / a^2 (1 when the run lights the smaller disc); for
         rings the lit area inside the window over the lit area, or 1 where they do not
-        overlap (the fraction of the incident power; see :attr:`white_normalised`)."""
+        overlap (the fraction of the incident power; see :attr:`white_normalised`); for
+        fibres the like over every source and receiver."""
         a, b = self.lit_diameter_mm, self.viewed_diameter_mm
-        if self.is_discs:
+        if self.is_discs and self.fibres is None:
             return 1.0 if a <= b or not brute_force else (b / a) ** 2
         f = self._white_overlap()
         return f if f > 0.0 else 1.0
@@ -340,6 +386,10 @@ class Instrument:
                 "illuminated_inner_diameter_mm": self.illuminated_inner_diameter_mm,
                 "viewed_inner_diameter_mm": self.viewed_inner_diameter_mm,
                 "white_normalised": self.white_normalised}),
+            # only for fibres: every other instrument's object is as before
+            **({} if self.fibres is None else {
+                **self.fibres.to_json(), "acceptance_deg": self.fibres.acceptance_deg,
+                "white_normalised": self.white_normalised}),
             # only with a tile: an instrument without one prints as before
             **({} if self.white_reference is None else {
                 "white_reference": self.white_reference.to_json(),
@@ -357,6 +407,11 @@ class Instrument:
             raise ValueError(f"unknown instrument field {bad[0]!r}: allowed {', '.join(KEYS)}")
         geometric = sorted(set(changes) - {"backing_black", "backing_white", "contact_index",
                                            "white_reference"})
+        regions = sorted(set(changes) - {"backing_black", "backing_white", "contact_index",
+                                         "white_reference", "fibres", "geometry"})
+        if self.fibres is not None and regions:
+            raise ValueError(f"{regions[0]}: instrument {self.name!r} is a fibre probe; its "
+                             "lit and read regions are its fibres: change fibres instead")
         if self.is_infinite and geometric:
             raise ValueError(f"{geometric[0]}: the 'infinite' instrument has no lit spot, window "
                              "or geometry to change; name a preset (dentalux instruments list) "
@@ -418,9 +473,26 @@ def _from_table(name: str, table: dict, where: str, builtin: bool = False,
         raise ValueError(f"{key}: the name {INFINITE!r} is reserved for the built-in "
                          "laterally infinite geometry (the adding formula); give your "
                          "instrument another name")
-    known = set(KEYS) | {"description", "provenance", "class"}
+    known = set(KEYS) | {"description", "provenance", "class", "tip_diameter_mm"}
     inputs.known_keys(table, known, key)
-    for k in ("geometry", "illuminated_diameter_mm", "viewed_diameter_mm"):
+    layout = None
+    if "fibres" in table or "tip_diameter_mm" in table:
+        for k in ("illuminated_diameter_mm", "viewed_diameter_mm", *INNER_KEYS):
+            if k in table:
+                raise ValueError(f"{key}.{k}: a fibre probe's lit and read regions are its "
+                                 "fibres (fibres, tip_diameter_mm): leave it out")
+        if "fibres" not in table:
+            raise ValueError(f"{key}.tip_diameter_mm: give the fibres too "
+                             f"([[instruments.{name}.fibres]])")
+        layout = fibre_layout.parse({"tip_diameter_mm": table.get("tip_diameter_mm"),
+                                     "fibres": table["fibres"]}, f"{key}.fibres")
+        if "specimen_diameter_mm" in table:
+            raise ValueError(f"{key}.specimen_diameter_mm: a fibre probe is read by the "
+                             "layered solver on a laterally infinite specimen (a rim's "
+                             "correction is a slab walk, which cannot follow separate "
+                             "fibres): leave it out")
+    for k in ("geometry",) + (() if layout else ("illuminated_diameter_mm",
+                                                 "viewed_diameter_mm")):
         if k not in table:
             raise ValueError(f"{key} needs {k!r}")
     geometry = inputs.text(table["geometry"], f"{key}.geometry")
@@ -443,10 +515,10 @@ def _from_table(name: str, table: dict, where: str, builtin: bool = False,
         return Instrument(
             name=name,
             geometry=geometry,
-            illuminated_diameter_mm=_diameter(f"{key}.illuminated_diameter_mm",
-                                              table["illuminated_diameter_mm"]),
-            viewed_diameter_mm=_diameter(f"{key}.viewed_diameter_mm",
-                                         table["viewed_diameter_mm"]),
+            illuminated_diameter_mm=layout.tip_diameter_mm if layout else _diameter(
+                f"{key}.illuminated_diameter_mm", table["illuminated_diameter_mm"]),
+            viewed_diameter_mm=layout.tip_diameter_mm if layout else _diameter(
+                f"{key}.viewed_diameter_mm", table["viewed_diameter_mm"]),
             backing_black=_backing(f"{key}.backing_black", table.get("backing_black", 0.0)),
             backing_white=_backing(f"{key}.backing_white", table.get("backing_white", 0.9)),
             contact_index=None if contact == 1.0 else contact,
@@ -462,6 +534,7 @@ def _from_table(name: str, table: dict, where: str, builtin: bool = False,
                 f"{key}.viewed_inner_diameter_mm",
                 table.get("viewed_inner_diameter_mm", 0.0), 0.0, False),
             white_reference=tile,
+            fibres=layout,
         )
     except ValueError as exc:
         msg = str(exc)

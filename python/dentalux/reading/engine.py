@@ -151,9 +151,19 @@ _SOLVED: dict = {}
 _SOLVED_KEEP = 256
 
 
+def _regions(inst) -> tuple:
+    """What the layered solver reads through: (detector cone, lit ring, window ring, pairs),
+    the rings None and the pairs given for a fibre probe (window.py)."""
+    if inst.fibres is not None:
+        return inst.spec.cone_deg, None, None, inst.fibres.pairs()
+    a0, a, b0, b, _, _, cone = inst.window(0.0)
+    return cone, (a0, a), (b0, b), None
+
+
 def _solve_key(band_stacks, inst, n_below: float) -> tuple:
+    geometry = inst.window(0.0) if inst.fibres is None else _regions(inst)
     return (tuple(tuple(lay.as_tuple(i) for i, lay in enumerate(stack))
-                  for stack in band_stacks), inst.window(0.0), float(n_below))
+                  for stack in band_stacks), geometry, float(n_below))
 
 
 def _solve_orders(specimens, inst, n_below: float, cb, done: int,
@@ -181,7 +191,7 @@ def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int,
     nodes) share its operators (layered.reuse)."""
     from dentalux.reading import layered
 
-    a0, a, b0, b, _, _, cone = inst.window(0.0)
+    cone, lit, view, pairs = _regions(inst)
     outs = [np.zeros((len(bs), MAX_ORDER + 1, len(WINDOW_KEYS))) for bs in specimens]
     groups: dict[tuple, list[tuple[int, list[int]]]] = {}
     for spec_i, bs in enumerate(specimens):
@@ -204,8 +214,8 @@ def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int,
                 group = [specimens[spec_i][i] for i in idx]
                 res = layered.responses(group, 1.0, n_below, cone, stop=stop.is_set)
                 local = layered.local_parts(group, 1.0, n_below)
-                outs[spec_i][idx] = layered.order_sums(res, local, first, (a0, a), (b0, b),
-                                                       MAX_ORDER, WINDOW_KEYS)
+                outs[spec_i][idx] = layered.order_sums(res, local, first, lit, view,
+                                                       MAX_ORDER, WINDOW_KEYS, pairs)
                 count += len(idx)
         return count
 
@@ -243,7 +253,7 @@ def solved(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
     wl_count = len(band_stacks)
     n_below = 1.0 if contact is None else float(contact)
     runs = 1 if contact is None else 2
-    rim = np.isfinite(inst.window(0.0)[4])
+    rim = inst.fibres is None and np.isfinite(inst.window(0.0)[4])
     start_cpu, start = time.process_time(), time.perf_counter()
     total = wl_count * runs * (2 if rim else 1)
     with bar(total, "bands", progress) as cb:
@@ -456,6 +466,10 @@ def use_layered(inst, solver: str) -> bool:
     layered solver; 'layered' where it does not hold is refused (ValueError)."""
     if solver not in SOLVERS:
         raise ValueError(f"solver = {solver!r}: allowed {', '.join(SOLVERS)}")
+    if solver == "monte-carlo" and inst.fibres is not None:
+        raise ValueError(f"solver = 'monte-carlo': instrument {inst.name!r} is a fibre probe, "
+                         "which the slab walk cannot follow (separate fibres); it is read by "
+                         "the layered solver: use solver = 'layered' or 'auto'")
     if solver == "monte-carlo":
         return False
     why = layered_refusal(inst)
@@ -504,6 +518,9 @@ def measure(band_stacks, wl, inst, rb_black, rb_white, photons: int, seed: int,
     layered = use_layered(inst, solver)
     if walks == "shared" and layered:
         # shared walks are a Monte Carlo method: 'auto' keeps the walks they name
+        if inst.fibres is not None:
+            raise ValueError(f"walks = 'shared': instrument {inst.name!r} is a fibre probe, "
+                             "read by the layered solver only; leave walks as 'per-band'")
         if solver == "layered":
             raise ValueError("walks = 'shared' needs solver = 'monte-carlo' (or 'auto')")
         layered = False

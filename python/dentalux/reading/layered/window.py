@@ -6,6 +6,13 @@ read is the overlap integral of S, W and the specimen's point response; by Parse
 viewed discs or rings and F the response at spatial frequency k. F is smooth and solved at a
 few k (stack.K_NODES); the kernel S W oscillates and is integrated on a fine grid.
 
+Regions that are not concentric (a fibre probe's separate fibres, :mod:`dentalux.fibres`)
+are a sum over pairs of a lit disc and a read disc: shifting the read disc by d multiplies
+the cross-spectrum by exp(i k.d), whose average over the directions of k is J0(k d), so a
+pair reads with the kernel S W J0(k d), weighted by its source's share of the power. A pair
+is ((inner, outer radius) lit, (inner, outer) read, d, weight); concentric regions are the
+one pair (lit, view, 0, 1).
+
 The Lambertian backing is local (zero gap), so it multiplies at each k: the reading over a
 backing R_b is V_0 + sum_{j >= 1} V_j R_b^j with V_0 the bare stack and V_j the integral of
 E e q^(j-1) (E: the beam's flux into the backing, q: the backing's light returned to it,
@@ -18,11 +25,12 @@ from functools import lru_cache
 
 import numpy as np
 from scipy.interpolate import CubicSpline
-from scipy.special import j1
+from scipy.special import j0, j1
 
 from dentalux.reading.layered.stack import Response
 
-# the k integral: the kernel oscillates with period 2 pi / (largest radius) and falls as
+# the k integral: the kernel oscillates with period 2 pi / (largest radius, plus the pair's
+# distance where the regions are not concentric) and falls as
 # k^-2; it is summed on a grid of FINE_PER_PERIOD points per period. Past the last solved k a
 # response keeps its local part (specular reflections and the unscattered beam, constant in
 # k) and its remainder falls as k^-p, p from the last two nodes within [0, 1] (1: a spreading
@@ -56,23 +64,59 @@ def overlap(lit, view) -> float:
     return 0.0 if hi <= lo else (hi**2 - lo**2) / (lit[1] ** 2 - lit[0] ** 2)
 
 
+def lens(d: float, a: float, b: float) -> float:
+    """Area [mm^2] shared by two discs of radii a and b whose centres are d apart."""
+    if d >= a + b:
+        return 0.0
+    if d <= abs(a - b):
+        return np.pi * min(a, b) ** 2
+    ca = np.clip((d * d + a * a - b * b) / (2 * d * a), -1.0, 1.0)
+    cb = np.clip((d * d + b * b - a * a) / (2 * d * b), -1.0, 1.0)
+    k = (-d + a + b) * (d + a - b) * (d - a + b) * (d + a + b)
+    return float(a * a * np.arccos(ca) + b * b * np.arccos(cb) - 0.5 * np.sqrt(max(k, 0.0)))
+
+
+def pairs_overlap(pairs) -> float:
+    """Fraction of the lit power falling inside the read regions, over every pair (a shifted
+    pair's regions are discs)."""
+    total = None
+    for lit, view, d, w in pairs:
+        term = overlap(lit, view) if d == 0 else lens(d, lit[1], view[1]) / (np.pi * lit[1] ** 2)
+        term = term if w == 1.0 else w * term
+        total = term if total is None else total + term
+    return total
+
+
+def pairs_kernel(k, pairs) -> np.ndarray:
+    """(1/2 pi) k sum_pairs w S(k) W(k) J0(k d) (module doc)."""
+    total = None
+    for lit, view, d, w in pairs:
+        term = disc_kernel(k, lit, view)
+        term = term if d == 0 else term * j0(np.asarray(k, float) * d)
+        term = term if w == 1.0 else w * term
+        total = term if total is None else total + term
+    return total
+
+
 @lru_cache(maxsize=32)
-def _weights(ks: tuple, lit: tuple, view: tuple) -> tuple[np.ndarray, np.ndarray, float]:
+def _weights(ks: tuple, pairs: tuple) -> tuple[np.ndarray, np.ndarray, float]:
     """Linear weights of the window's reading: (spline part per node, the last node's tail
     weight per exponent of TAIL_EXPONENTS, the overlap that the local part is read with)."""
     k_last = ks[-1]
-    step = 2 * np.pi / max(lit[1], view[1]) / FINE_PER_PERIOD
+    step = 2 * np.pi / max(max(lit[1], view[1]) + d for lit, view, d, _ in pairs) \
+        / FINE_PER_PERIOD
     fine = np.arange(step / 2, k_last, step)
     far = np.arange(k_last + step / 2, TAIL_FACTOR * k_last, step)
     basis = CubicSpline(np.arcsinh(np.asarray(ks) / K_SCALE), np.eye(len(ks)))(
         np.arcsinh(fine / K_SCALE))                                 # (fine, nodes)
-    near_kernel = disc_kernel(fine, lit, view) * step
-    far_kernel = disc_kernel(far, lit, view) * step
+    near_kernel = pairs_kernel(fine, pairs) * step
+    far_kernel = pairs_kernel(far, pairs) * step
     spline = near_kernel @ basis
-    beyond = overlap(lit, view) - near_kernel.sum() - far_kernel.sum()
+    over = pairs_overlap(pairs)
+    beyond = over - near_kernel.sum() - far_kernel.sum()
     tails = np.array([(k_last / far) ** p @ far_kernel + (1 - p) * beyond
                       for p in TAIL_EXPONENTS])
-    return spline, tails, overlap(lit, view)
+    return spline, tails, over
 
 
 def tail_exponent(ks, rest: np.ndarray) -> np.ndarray:
@@ -84,11 +128,19 @@ def tail_exponent(ks, rest: np.ndarray) -> np.ndarray:
     return np.where((a * b > 0) & np.isfinite(p), np.clip(p, 0.0, 1.0), 1.0)
 
 
-def integrate(ks, values: np.ndarray, lit, view, local=0.0) -> np.ndarray:
+def as_pairs(lit, view, pairs=None) -> tuple:
+    """``pairs`` as hashable floats, or the concentric lit ring and window as one pair."""
+    if pairs is None:
+        pairs = ((lit, view, 0.0, 1.0),)
+    return tuple((tuple(map(float, li)), tuple(map(float, vi)), float(d), float(w))
+                 for li, vi, d, w in pairs)
+
+
+def integrate(ks, values: np.ndarray, lit, view, local=0.0, pairs=None) -> np.ndarray:
     """The window's reading of responses ``values`` (..., len(ks)) whose part ``local``
-    (...) is constant in k (module doc)."""
-    spline, tails, over = _weights(tuple(map(float, ks)), tuple(map(float, lit)),
-                                   tuple(map(float, view)))
+    (...) is constant in k (module doc); ``pairs`` (given: ``lit`` and ``view`` unused)
+    for regions that are not concentric."""
+    spline, tails, over = _weights(tuple(map(float, ks)), as_pairs(lit, view, pairs))
     local = np.asarray(local, float)
     rest = values - local[..., None]
     tail = np.interp(tail_exponent(np.asarray(ks, float), rest), TAIL_EXPONENTS, tails)
@@ -96,10 +148,16 @@ def integrate(ks, values: np.ndarray, lit, view, local=0.0) -> np.ndarray:
 
 
 def order_sums(res: Response, local: Response, first_surface: float, lit, view,
-               max_order: int, keys: tuple[str, ...]) -> np.ndarray:
+               max_order: int, keys: tuple[str, ...], pairs=None) -> np.ndarray:
     """The window tallies by backing order that the slab walk estimates, (bands, max_order
     + 1, keys) per unit incident power, from the stack's response ``res``, its local parts
-    and its first-surface (specular) reflectance; no rim (its key is 0)."""
+    and its first-surface (specular) reflectance; no rim (its key is 0). ``pairs``: regions
+    that are not concentric (module doc), in place of ``lit`` and ``view``."""
+    pairs = as_pairs(lit, view, pairs)
+
+    def read(values, local_part=0.0):
+        return integrate(res.k, values, lit, view, local_part, pairs)
+
     bands = res.r_all.shape[0]
     out = np.zeros((bands, max_order + 1, len(keys)))
     col = {k: i for i, k in enumerate(keys)}
@@ -107,20 +165,17 @@ def order_sums(res: Response, local: Response, first_surface: float, lit, view,
     ballistic = local.into_backing[:, 0]
     q_pow = res.q[:, None, :] ** np.arange(max_order)[None, :, None]  # (bands, j-1, k)
     both = res.into_backing[:, None, :] * q_pow
-    viewed = integrate(res.k, res.r_all, lit, view, spec)
+    viewed = read(res.r_all, spec)
     out[:, 0, col["viewed_reflectance"]] = viewed
-    out[:, 0, col["viewed_specular"]] = first_surface * overlap(lit, view)
-    out[:, 0, col["viewed_cone_reflectance"]] = integrate(res.k, res.r_cone, lit, view)
+    out[:, 0, col["viewed_specular"]] = first_surface * pairs_overlap(pairs)
+    out[:, 0, col["viewed_cone_reflectance"]] = read(res.r_cone)
     out[:, 0, col["outside_reflectance"]] = res.r_all[:, 0] - viewed
-    out[:, 0, col["viewed_transmittance"]] = integrate(res.k, res.into_backing, lit, view,
-                                                       ballistic)
+    out[:, 0, col["viewed_transmittance"]] = read(res.into_backing, ballistic)
     up_all = both * res.e_all[:, None, :]
-    viewed_j = integrate(res.k, up_all, lit, view)
+    viewed_j = read(up_all)
     out[:, 1:, col["viewed_reflectance"]] = viewed_j
-    out[:, 1:, col["viewed_cone_reflectance"]] = integrate(
-        res.k, both * res.e_cone[:, None, :], lit, view)
+    out[:, 1:, col["viewed_cone_reflectance"]] = read(both * res.e_cone[:, None, :])
     out[:, 1:, col["outside_reflectance"]] = up_all[..., 0] - viewed_j
-    out[:, 1:, col["viewed_transmittance"]] = integrate(res.k, both * res.q[:, None, :], lit,
-                                                        view)
+    out[:, 1:, col["viewed_transmittance"]] = read(both * res.q[:, None, :])
     return out
 
