@@ -28,6 +28,7 @@ from dentalux import dental
 from dentalux import instrument as instruments
 from dentalux.design import constraints, substrates, targets, verify
 from dentalux.reading import DEFAULT_SOLVER
+from dentalux.reading.engine import sharing
 
 #: the seed offset of the candidates' reads (the verification's: seed + 1)
 SEED_OFFSET = 1
@@ -127,6 +128,7 @@ def _cement(cement):
     return None if parsed is None else (dental._resolve_material(parsed[0]), parsed[1])
 
 
+@sharing()
 def evaluate(target, layers, candidates, total=None, substrate: str = "dentin", cement=None,
              instrument=instruments.DEFAULT, bands=dental.DEFAULT_BANDS,
              target_tp: float | None = None, photons: int = 10_000, seed: int = 1,

@@ -162,6 +162,7 @@ def _thickness_stderr(surface: Surface, point, lab_err, target_err) -> list:
     return [float(np.sqrt(x)) if np.isfinite(x) and x >= 0 else None for x in diag]
 
 
+@reading.engine.sharing()
 def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
              instrument=instruments.DEFAULT, bands=dental.DEFAULT_BANDS,
              target_tp: float | None = None, photons: int = DEFAULT_PHOTONS,

@@ -24,6 +24,7 @@ import os
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -160,6 +161,17 @@ def _regions(inst) -> tuple:
     return cone, (a0, a), (b0, b), None
 
 
+@contextmanager
+def sharing():
+    """Within this block the layered solver keeps each material's eigen-decomposition across
+    solves (:func:`dentalux.reading.layered.share`): a design's table, its verifications and
+    its evaluations then decompose each material once. Usable as a decorator."""
+    from dentalux.reading import layered
+
+    with layered.share():
+        yield
+
+
 def _solve_key(band_stacks, inst, n_below: float) -> tuple:
     geometry = inst.window(0.0) if inst.fibres is None else _regions(inst)
     return (tuple(tuple(lay.as_tuple(i) for i, lay in enumerate(stack))
@@ -206,13 +218,13 @@ def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int,
         indices, entries, lo = chunk
         first = float(_core.fresnel_reflectance([1.0], 1.0, indices[0])[0])
         count = 0
+        # this chunk's bands of every specimen (a specimen whose bands end before it has none)
+        work = [(spec_i, members[lo:lo + LAYERED_CHUNK]) for spec_i, members in entries]
+        work = [(spec_i, idx) for spec_i, idx in work if idx]
+        groups = [[specimens[spec_i][i] for i in idx] for spec_i, idx in work]
         with layered.reuse():
-            for spec_i, members in entries:
-                idx = members[lo:lo + LAYERED_CHUNK]
-                if not idx or stop.is_set():
-                    continue
-                group = [specimens[spec_i][i] for i in idx]
-                res = layered.responses(group, 1.0, n_below, cone, stop=stop.is_set)
+            found = layered.responses_many(groups, 1.0, n_below, cone, stop=stop.is_set)
+            for (spec_i, idx), group, res in zip(work, groups, found, strict=True):
                 local = layered.local_parts(group, 1.0, n_below)
                 outs[spec_i][idx] = layered.order_sums(res, local, first, lit, view,
                                                        MAX_ORDER, WINDOW_KEYS, pairs)

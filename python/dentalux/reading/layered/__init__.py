@@ -9,8 +9,8 @@ only what the rim takes (the reading engine). It has no noise; its discretisatio
 checked against the slab Monte Carlo (tests/test_layered.py).
 """
 
-from dentalux.reading.layered.operators import reuse
-from dentalux.reading.layered.stack import local_parts, responses
+from dentalux.reading.layered.operators import reuse, share
+from dentalux.reading.layered.stack import local_parts, responses, responses_many
 from dentalux.reading.layered.window import order_sums
 
-__all__ = ["local_parts", "order_sums", "responses", "reuse"]
+__all__ = ["local_parts", "order_sums", "responses", "responses_many", "reuse", "share"]

@@ -88,10 +88,18 @@ MIN_EXTINCTION = 1e-6
 
 # operators kept while reading several specimens that share layers (:func:`reuse`): a
 # design's nodes repeat each material and each thickness. Per thread: bands are solved in
-# chunks on several threads, each with its own. At most KEEP of them (up to about 15 MB
-# each for a chunk of 4 bands), the least recently used dropped first
+# chunks on several threads, each with its own. A layer's eigen-decomposition (per material:
+# the costly part) is kept for the whole block; of the rest (per thickness and per stack) at
+# most KEEP (up to about 15 MB each for a chunk of 4 bands), the least recently used dropped
+# first, so that a design's many thicknesses do not push out its few materials
 _LOCAL = threading.local()
 KEEP = 32
+# eigen-decompositions kept across solves and threads inside :func:`share` (a design's
+# table, its verifications and its evaluations decompose each material once), up to
+# SHARE_BYTES, the oldest dropped first
+_SHARED: dict | None = None
+_SHARED_LOCK = threading.Lock()
+SHARE_BYTES = 2 * 1024**3
 
 
 @contextmanager
@@ -101,12 +109,27 @@ def reuse():
     they are dropped on leaving it (they take tens of MB each)."""
     outer = getattr(_LOCAL, "kept", None)
     if outer is None:
-        _LOCAL.kept = {}
+        _LOCAL.kept, _LOCAL.eigen = {}, {}
     try:
         yield
     finally:
         if outer is None:
-            _LOCAL.kept = None
+            _LOCAL.kept = _LOCAL.eigen = None
+
+
+@contextmanager
+def share():
+    """Within this block the layers' eigen-decompositions are kept for every solve on every
+    thread, not only within one :func:`reuse` block; dropped on leaving the outermost."""
+    global _SHARED
+    outer = _SHARED
+    if outer is None:
+        _SHARED = {}
+    try:
+        yield
+    finally:
+        if outer is None:
+            _SHARED = None
 
 
 def kept(key, make):
@@ -122,6 +145,28 @@ def kept(key, make):
     return value
 
 
+def _kept_eigen(key, make):
+    """``make()`` (an eigen-decomposition), kept inside :func:`share` or :func:`reuse`."""
+    shared = _SHARED
+    if shared is not None:
+        with _SHARED_LOCK:
+            value = shared.get(key)
+        if value is None:
+            value = make()
+            with _SHARED_LOCK:
+                shared[key] = value
+                total = sum(sum(a.nbytes for a in v) for v in shared.values())
+                while len(shared) > 1 and total > SHARE_BYTES:
+                    total -= sum(a.nbytes for a in shared.pop(next(iter(shared))))
+        return value
+    store = getattr(_LOCAL, "eigen", None)
+    if store is None:
+        return make()
+    if key not in store:
+        store[key] = make()
+    return store[key]
+
+
 def layer(optics, thickness: float, n: float, nodes: Nodes, ks, modes: int
           ) -> tuple[np.ndarray, np.ndarray]:
     """Reflection and transmission of a homogeneous layer (the same from above and below)
@@ -131,7 +176,7 @@ def layer(optics, thickness: float, n: float, nodes: Nodes, ks, modes: int
     ks = np.asarray(ks, float)
     key = (mua.tobytes(), mus.tobytes(), chi.tobytes(), float(n), nodes.s.tobytes(),
            ks.tobytes(), int(modes))
-    eig = kept(key, lambda: _eigen(optics, n, nodes, ks, modes))
+    eig = _kept_eigen(key, lambda: _eigen(optics, n, nodes, ks, modes))
     return kept(key + (float(thickness),), lambda: _slab(eig, thickness))
 
 
@@ -218,3 +263,26 @@ def add(a: Element, b: Element) -> Element:
     up = np.linalg.solve(eye - b.rd @ a.ru, b.tu)    # and of b's light into a
     return Element(rd=a.rd + a.tu @ (b.rd @ down), td=b.td @ down,
                    ru=b.ru + b.td @ (a.ru @ up), tu=a.tu @ up)
+
+
+def join(a: Element, b: Element, beam: int, below: int) -> tuple[np.ndarray, ...]:
+    """The parts of ``a`` above ``b`` that a reading needs, without forming the whole sum:
+    for a unit beam in node ``beam`` from above, the reflected and the transmitted radiance
+    vectors, and for unit radiance in each of the first ``below`` nodes from below, the sum
+    of the reflected and of the transmitted vectors. One system (I - a.ru b.rd) serves both
+    directions through (I - B A)^-1 = I + B (I - A B)^-1 A; :func:`add` would solve two, with
+    a whole matrix on the right of each."""
+    eye = np.eye(a.ru.shape[-1])
+    w = b.tu[..., :below].sum(-1)                       # b's light from below, into a
+    rhs = np.stack(np.broadcast_arrays(a.td[..., beam], _apply(a.ru, w)), axis=-1)
+    sol = np.linalg.solve(eye - a.ru @ b.rd, rhs)
+    x = sol[..., 0]                                     # every order of a's beam into b
+    y = w + _apply(b.rd, sol[..., 1])                   # every order of b's light into a
+    return (a.rd[..., beam] + _apply(a.tu, _apply(b.rd, x)), _apply(b.td, x),
+            b.ru[..., :below].sum(-1) + _apply(b.td, _apply(a.ru, y)), _apply(a.tu, y))
+
+
+def _apply(m: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Matrices times vectors over the leading axes."""
+    return (m @ v[..., None])[..., 0]
+

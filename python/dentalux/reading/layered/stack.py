@@ -77,19 +77,29 @@ def response(band_stacks, ks, n_above: float, n_below: float, cone_deg, modes: i
     total = ops.interface(n_above, first[0].n, nodes, modes)
     ks = np.asarray(ks, float)
     prefix: tuple = ("stack", nodes.s.tobytes(), ks.tobytes(), int(modes), float(n_above))
-    for i, lay in enumerate(first):
-        optics = _optics(band_stacks, i, order)
-        n_next = first[i + 1].n if i + 1 < len(first) else n_below
-        # the stack down to here, kept for specimens that share it (ops.reuse)
-        prefix += (tuple(o.tobytes() for o in optics), float(lay.thickness), float(lay.n),
+    optics = [_optics(band_stacks, i, order) for i in range(len(first))]
+    # every layer but the last onto the top interface, kept for specimens that share that
+    # much of the stack (ops.reuse); the last layer with the bottom interface, kept alike
+    for i, lay in enumerate(first[:-1]):
+        n_next = first[i + 1].n
+        prefix += (tuple(o.tobytes() for o in optics[i]), float(lay.thickness), float(lay.n),
                    float(n_next))
 
-        def extend(above=total, lay=lay, optics=optics, n_next=n_next):
+        def extend(above=total, lay=lay, optics=optics[i], n_next=n_next):
             r, t = ops.layer(optics, lay.thickness, lay.n, nodes, ks, modes)
             return ops.add(ops.add(above, ops.Element(r, t, r, t)),
                            ops.interface(lay.n, n_next, nodes, modes))
 
         total = ops.kept(prefix, extend)
+    last = first[-1]
+
+    def closing():
+        r, t = ops.layer(optics[-1], last.thickness, last.n, nodes, ks, modes)
+        return ops.add(ops.Element(r, t, r, t), ops.interface(last.n, n_below, nodes, modes))
+
+    bottom = ops.kept(("last", nodes.s.tobytes(), ks.tobytes(), int(modes),
+                       tuple(o.tobytes() for o in optics[-1]), float(last.thickness),
+                       float(last.n), float(n_below)), closing)
     top, bot = nodes.count(n_above), nodes.count(n_below)
     flux_top = 2 * np.pi * nodes.weights(n_above) * nodes.mu(n_above)
     flux_bot = 2 * np.pi * nodes.weights(n_below) * nodes.mu(n_below)
@@ -99,10 +109,12 @@ def response(band_stacks, ks, n_above: float, n_below: float, cone_deg, modes: i
         lo, hi = np.radians(cone_deg)
         cone = cone_weights(nodes.mu(n_above), np.cos(hi), np.cos(lo))
         cone = cone / (np.sin(hi) ** 2 - np.sin(lo) ** 2)
-    up = total.rd[..., :top, 0] / flux_top[0]         # unit irradiance in the normal node
-    down = total.td[..., :bot, 0] / flux_top[0]
-    back = total.ru[..., :bot, :bot].sum(-1) / np.pi  # unit Lambertian exitance below
-    leave = total.tu[..., :top, :bot].sum(-1) / np.pi
+    # the beam in the normal node (node 0) from above, a Lambertian exitance from below
+    rd, td, ru, tu = ops.join(total, bottom, 0, bot)
+    up = rd[..., :top] / flux_top[0]                  # unit irradiance in the normal node
+    down = td[..., :bot] / flux_top[0]
+    back = ru[..., :bot] / np.pi                      # unit Lambertian exitance below
+    leave = tu[..., :top] / np.pi
     return Response(k=np.asarray(ks, float), r_cone=up @ cone, r_all=up @ flux_top,
                     into_backing=down @ flux_bot, q=back @ flux_bot, e_cone=leave @ cone,
                     e_all=leave @ flux_top)
@@ -123,21 +135,34 @@ def responses(band_stacks, n_above: float, n_below: float, cone_deg, ks=K_NODES,
     """:func:`response` at every spatial frequency of ``ks``, each with the modes
     ``modes_by_k`` gives it, solved in groups of equal modes; ``stop()``, asked before each
     group, ends it early (:class:`Stopped`); ``single_scatter``: the cone's correction."""
+    return responses_many([band_stacks], n_above, n_below, cone_deg, ks, stop, modes_by_k,
+                          single_scatter, **settings)[0]
+
+
+def responses_many(specimens, n_above: float, n_below: float, cone_deg, ks=K_NODES,
+                   stop=None, modes_by_k=MODES_BY_K, single_scatter: bool = SINGLE_SCATTER,
+                   **settings) -> list[Response]:
+    """:func:`responses` of several specimens (each one stack per band, the same bands): one
+    group of modes at a time for every specimen, so that the operators a group keeps
+    (ops.reuse: its layers per thickness, its partial stacks) serve every specimen that
+    shares them before the next group's take their place."""
     ks = np.asarray(ks, float)
     groups: dict[int, list[int]] = {}
     for i, k in enumerate(ks):
         groups.setdefault(modes_for(k, modes_by_k), []).append(i)
-    out = {f: np.zeros((len(band_stacks), len(ks))) for f in FIELDS}
+    outs = [{f: np.zeros((len(bs), len(ks))) for f in FIELDS} for bs in specimens]
     for modes, idx in groups.items():
-        if stop is not None and stop():
-            raise Stopped
-        res = response(band_stacks, ks[idx], n_above, n_below, cone_deg, modes, **settings)
-        for f in FIELDS:
-            out[f][:, idx] = getattr(res, f)
-    if cone_deg is not None and single_scatter:
-        out["r_cone"] += single.correction(band_stacks, ks, n_above, cone_deg,
-                                           settings.get("order", ORDER))
-    return Response(k=ks, **out)
+        for bs, out in zip(specimens, outs, strict=True):
+            if stop is not None and stop():
+                raise Stopped
+            res = response(bs, ks[idx], n_above, n_below, cone_deg, modes, **settings)
+            for f in FIELDS:
+                out[f][:, idx] = getattr(res, f)
+    for bs, out in zip(specimens, outs, strict=True):
+        if cone_deg is not None and single_scatter:
+            out["r_cone"] += single.correction(bs, ks, n_above, cone_deg,
+                                               settings.get("order", ORDER))
+    return [Response(k=ks, **out) for out in outs]
 
 
 def local_parts(band_stacks, n_above: float, n_below: float, order: int = ORDER
