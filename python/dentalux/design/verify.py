@@ -4,10 +4,13 @@ The design's specimen is read by :func:`dentalux.dental.read` (the same forward 
 ``dentalux shade --layer``), with a different seed from the search's response surface, so
 the two are independent estimates. A design is ``verified`` when every compared number
 (L*, a*, b* over the white backing, and TP00 where a TP target is given) agrees with the
-fast model within ``SIGMAS`` combined standard errors, sqrt(s_fast^2 + s_mc^2), and the
-verification could have failed: ``SIGMAS`` combined standard errors amount to less than a
-perceptible difference (ΔE00 0.8) at the design's colour. A verification too noisy to see a
-perceptible disagreement verifies nothing and says so.
+fast model within ``SIGMAS`` combined standard errors, sqrt(s_fast^2 + s_mc^2 + FLOOR^2),
+and the verification could have failed: ``SIGMAS`` combined standard errors amount to less
+than a perceptible difference (ΔE00 0.8) at the design's colour. A verification too noisy to
+see a perceptible disagreement verifies nothing and says so. FLOOR stands for what no
+standard error covers, the fast model's interpolation between its nodes: where both reads
+are noise-free (the layered solver on a laterally infinite specimen) the two must then agree
+within SIGMAS x FLOOR = 0.1 in each of L*, a*, b* and TP00, the resolution a decision needs.
 """
 
 from __future__ import annotations
@@ -20,6 +23,8 @@ from dentalux import dental
 from dentalux.color import delta_e00, delta_e00_scale
 
 SIGMAS = 4.0
+#: the standard error every comparison allows at least, in L*, a*, b* and TP00 (module doc)
+FLOOR = 0.025
 
 
 def delta_e_stderr(lab, lab_err, target, target_err=(0.0, 0.0, 0.0)) -> float:
@@ -40,15 +45,14 @@ def compare(fast: dict, mc: dental.DentalMetrics, tp: bool) -> dict:
     """z-scores of the fast model against the Monte Carlo read, and the verdict."""
     keys = [("L", 0), ("a", 1), ("b", 2)]
     z = {}
-    for c, j in keys:
-        s = math.hypot(fast["stderr"]["lab_white"][j], mc.stderr[f"lab_white.{c}"])
-        z[f"lab_white.{c}"] = (fast["values"]["lab_white"][j] - mc.lab_white[j]) / s if s else 0.0
-    if tp:
-        s = math.hypot(fast["stderr"]["tp00"], mc.stderr["tp00"])
-        z["tp00"] = (fast["values"]["tp00"] - mc.tp00) / s if s else 0.0
-    worst = max(abs(v) for v in z.values())
-    combined = [math.hypot(fast["stderr"]["lab_white"][j], mc.stderr[f"lab_white.{c}"])
+    combined = [math.hypot(fast["stderr"]["lab_white"][j], mc.stderr[f"lab_white.{c}"], FLOOR)
                 for c, j in keys]
+    for c, j in keys:
+        z[f"lab_white.{c}"] = (fast["values"]["lab_white"][j] - mc.lab_white[j]) / combined[j]
+    if tp:
+        s = math.hypot(fast["stderr"]["tp00"], mc.stderr["tp00"], FLOOR)
+        z["tp00"] = (fast["values"]["tp00"] - mc.tp00) / s
+    worst = max(abs(v) for v in z.values())
     resolution = SIGMAS * delta_e00_scale(mc.lab_white, combined)
     could_fail = resolution <= dental.PT
     return {"z": z, "max_abs_z": worst, "verified": bool(worst <= SIGMAS and could_fail),
