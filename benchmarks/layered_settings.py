@@ -28,15 +28,17 @@ CASES = {
     "dentin 2 mm, probe": ([("dentin", 2.0)], "contact-probe-3mm"),
     "stack 0.6/0.9, probe": ([("enamel", 0.6), ("dentin", 0.9)], "contact-probe-3mm"),
     "stack 0.6/0.9, 45-0": ([("enamel", 0.6), ("dentin", 0.9)], "45-0"),
+    "enamel 1 mm, fibre probe": ([("enamel", 1.0)], "fibre-probe"),
 }
 DEFAULT = dict(per_interval=stack.NODES_PER_INTERVAL, ks=stack.K_NODES,
                modes=stack.MODES_BY_K)
-# finer in every direction: nodes, spatial frequencies (midpoints added), modes (+4: the
-# azimuthal truncation alternates in sign between odd and even mode counts, so one more
-# mode is no reference)
-_MID = tuple(sorted(set(stack.K_NODES) | {0.5 * (a + b) for a, b in
-                                          zip(stack.K_NODES[:-1], stack.K_NODES[1:],
-                                              strict=True)}))
+# the 14 spatial frequencies of before 7 Dec 2026 (fourth session)
+K_14 = (0.0, 0.1, 0.25, 0.5, 0.8, 1.2, 1.8, 2.7, 4.0, 6.0, 9.0, 14.0, 21.0, 32.0)
+# finer in every direction: nodes, spatial frequencies (both sets and the 14's midpoints, a
+# reference that does not move with the default), modes (+4: the azimuthal truncation
+# alternates in sign between odd and even mode counts, so one more mode is no reference)
+_MID = tuple(sorted(set(K_14) | set(stack.K_NODES)
+                    | {0.5 * (a + b) for a, b in zip(K_14[:-1], K_14[1:], strict=True)}))
 
 
 def _more_modes(extra: int) -> tuple:
@@ -52,6 +54,7 @@ CANDIDATES = {
                                                (np.inf, 4))),
     "5 modes past k 1.5": dict(DEFAULT, modes=((0.0, 1), (0.3, 3), (1.5, 4), (12.0, 5),
                                                (np.inf, 5))),
+    "14 spatial frequencies": dict(DEFAULT, ks=K_14),
     "nodes (7, 5)": dict(DEFAULT, per_interval=(7, 5)),
     "nodes (10, 8)": dict(DEFAULT, per_interval=(10, 8)),
 }
@@ -60,7 +63,7 @@ CANDIDATES = {
 def readings(parts, inst, wl, settings) -> tuple[np.ndarray, float]:
     """(3, bands) over black, over white and transmitted, and the solve's CPU-s."""
     bs = engine.stacks([(materials.get(m), t) for m, t in parts], wl)
-    a0, a, b0, b, _, _, cone = inst.window(0.0)
+    cone, lit, view, pairs = engine._regions(inst)
     start = time.process_time()
     sums = []
     for indices, members in engine.by_indices(bs).items():
@@ -70,8 +73,8 @@ def readings(parts, inst, wl, settings) -> tuple[np.ndarray, float]:
                                 per_interval=settings["per_interval"])
         local = layered.local_parts(group, 1.0, 1.0)
         first = float(engine._core.fresnel_reflectance([1.0], 1.0, indices[0])[0])
-        sums.append(layered.order_sums(res, local, first, (a0, a), (b0, b),
-                                       engine.MAX_ORDER, engine.WINDOW_KEYS))
+        sums.append(layered.order_sums(res, local, first, lit, view, engine.MAX_ORDER,
+                                       engine.WINDOW_KEYS, pairs))
     cpu = time.process_time() - start
     s = np.concatenate(sums)[:, None]  # (bands, 1 replicate, orders, keys)
     key = "viewed_cone_reflectance" if inst.spec.cone_deg else "viewed_reflectance"

@@ -325,3 +325,27 @@ def test_infinite_geometry_design_agrees_and_an_imprecise_check_verifies_nothing
     assert v["resolution_delta_e00"] > dental.PT and not v["could_fail"]
     assert d["verified"] is False and "inconclusive" in v["note"]
     assert res.to_json()["instrument"]["name"] == "infinite"
+
+
+def test_a_noise_free_verification_can_fail():
+    """Both reads noise-free (the layered solver, no rim): the comparison still allows only
+    the floor that stands for the fast model's interpolation (verify.FLOOR), so a
+    disagreement of 4 floors or more is caught and a smaller one passes; with a zero floor
+    every z would be 0 and the check could not fail."""
+    from types import SimpleNamespace
+
+    from dentalux.design import verify
+
+    lab = [70.0, 2.0, 15.0]
+    zero = {"lab_white.L": 0.0, "lab_white.a": 0.0, "lab_white.b": 0.0, "tp00": 0.0}
+    read = SimpleNamespace(lab_white=lab, tp00=10.0, stderr=zero)
+
+    def fast(shift):
+        return {"values": {"lab_white": [lab[0], lab[1], lab[2] + shift], "tp00": 10.0},
+                "stderr": {"lab_white": [0.0, 0.0, 0.0], "tp00": 0.0}}
+
+    near = verify.compare(fast(0.5 * verify.SIGMAS * verify.FLOOR), read, tp=True)
+    far = verify.compare(fast(1.5 * verify.SIGMAS * verify.FLOOR), read, tp=True)
+    assert near["verified"] and near["could_fail"], near
+    assert not far["verified"] and not far["agrees"] and far["could_fail"], far
+    assert far["max_abs_z"] == pytest.approx(1.5 * verify.SIGMAS)
