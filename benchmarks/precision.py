@@ -3,7 +3,9 @@
 A reading's cost to reach a standard error s is proportional to s² × CPU-s of any run (the
 variance falls as 1/photons), so the product is the method's figure of merit: lower is
 better, and the ratio of two methods is how many times cheaper one reaches the same
-precision. Methods, each through the default instrument (the contact probe), 41 bands:
+precision. Methods, each through the contact probe (``contact-probe-3mm``, whose 10 mm
+specimen has a rim; the default instrument, 45-0, has none, so its layered reading has no
+noise at all), 41 bands:
 
 - ``separate-runs``: the reading before the reading engine: one slab walk per band and per
   backing (black, white) and one more for the transmitted light (the probe's black backing
@@ -15,7 +17,8 @@ precision. Methods, each through the default instrument (the contact probe), 41 
 - ``layered``: the engine's deterministic solver (``solver="layered"``,
   dentalux.reading.layered), exact for a laterally infinite specimen; the probe's 10 mm
   specimen is finite, so a walk of the same photons per band tallies what its rim takes, and
-  that walk is the reading's only noise.
+  that walk (split on its way to the rim and back, ``engine.RIM_SHARE``) is the reading's
+  only noise.
 
 The layered reading's CPU has a fixed part, the solver (deterministic, the same for every
 seed), and a part that grows with photons, the rim walk; variance × CPU-s only means
@@ -52,6 +55,8 @@ from dentalux.reading import engine as reading_engine
 from dentalux.slab import simulate
 from dentalux.spectra import Reconstruction, resolve_bands
 
+# the instrument of every method: a probe on a finite specimen (module doc)
+PROBE = "contact-probe-3mm"
 CASES = {
     "enamel 1 mm": [("enamel", 1.0)],
     "dentin 2 mm": [("dentin", 2.0)],
@@ -63,7 +68,7 @@ QUANTITIES = ("lab_black.L", "lab_black.a", "lab_black.b", "lab_white.L", "lab_w
 
 def separate_runs(parts, photons: int, seed: int) -> tuple[dict, float]:
     """The reading with one walk per band and backing (the method before the engine)."""
-    inst = instrument.get(instrument.DEFAULT)
+    inst = instrument.get(PROBE)
     wl = resolve_bands("full")
     rb_black = dental.backing_spectrum(inst.backing_black, wl, "backing_black")
     rb_white = dental.backing_spectrum(inst.backing_white, wl, "backing_white")
@@ -100,7 +105,7 @@ def engine(parts, photons: int, seed: int, walks: str = "per-band",
            solver: str = "monte-carlo") -> tuple[dict, float, dict, float]:
     """A reading through the engine: the values, CPU-s, claimed s.e. and the solver's CPU-s
     (0 for the walks, and for a layered reading whose solution was cached)."""
-    m = dental.read(parts, instrument=instrument.DEFAULT, photons=photons, seed=seed,
+    m = dental.read(parts, instrument=PROBE, photons=photons, seed=seed,
                     walks=walks, solver=solver)
     flat = {"tp00": m.tp00, "cr": m.cr}
     for key in ("lab_black", "lab_white"):
@@ -119,7 +124,7 @@ def main() -> None:
     args = ap.parse_args()
     methods = [m for m in METHODS if m in args.methods]
     ref = methods[0]
-    print(f"instrument {instrument.DEFAULT}, 41 bands, {args.photons} photons per band and "
+    print(f"instrument {PROBE}, 41 bands, {args.photons} photons per band and "
           f"walk, {args.seeds} seeds; variance = spread over seeds")
     for case, parts in CASES.items():
         runs = {m: [] for m in methods}

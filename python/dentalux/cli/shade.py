@@ -119,8 +119,12 @@ def shade_command(
         table.add_row(f"{match} {row['tab']}", f"ΔE00 {row['delta_e00']:.2f}")
     if m.get("shade_match_instrument", {}).get("note"):
         table.add_row("  guide instrument", m["shade_match_instrument"]["note"])
-    how = (f"layered solver and {m['photons']} rim-correction photons"
-           if m["method"] == "layered" else f"{m['photons']} photons")
+    if m["method"] != "layered":
+        how = f"{m['photons']} photons"
+    elif m["photons"]:
+        how = f"layered solver and a rim walk of {m['photons']} photons' budget"
+    else:
+        how = "layered solver alone (no rim, no Monte Carlo)"
     photons_line = f"{how}, {m['cpu_seconds']:.1f} CPU-s"
     if "precision" in m:
         p = m["precision"]

@@ -54,8 +54,28 @@ const TARGET_BATCHES: u64 = 64;
 pub fn batch_size(n_photons: u64) -> u64 {
     (n_photons / TARGET_BATCHES).clamp(MIN_BATCH, BATCH)
 }
+/// Fewest photons per batch of a rim walk ([`BackingOrders::past_rim_only`]): each of its
+/// photons is split into several walks, so small batches cost little set-up, and a run of a
+/// few hundred photons still has [`REPLICATES`] batches for its standard error.
+const MIN_RIM_BATCH: u64 = 8;
+
+/// [`batch_size`], or for a rim walk the same with [`MIN_RIM_BATCH`].
+fn run_batch_size(cfg: &SlabConfig) -> u64 {
+    if cfg.backing_orders.is_some_and(|o| o.past_rim_only) {
+        (cfg.n_photons / TARGET_BATCHES).clamp(MIN_RIM_BATCH, BATCH)
+    } else {
+        batch_size(cfg.n_photons)
+    }
+}
 /// Below this weight the weighted estimator switches to the energy-exact roulette.
 const WEIGHT_THRESHOLD: f64 = 1e-4;
+/// Importance splitting of the rim walk ([`BackingOrders::past_rim_only`]): its tallies
+/// come only from photons that reach the specimen's rim (and, for the window, come back), so
+/// a photon is split in two, each half the weight, when it first gets farther out than each
+/// of these fractions of the rim radius, and again, once past the rim, when it first comes
+/// back inside each of them. Splitting keeps every tally's expectation (the halves are
+/// independent continuations) and spends the walk's time on the histories that count.
+const RIM_SPLIT_FRACTIONS: [f64; 3] = [0.5, 0.7, 0.85];
 /// A photon with more interactions than this means an input Monte Carlo cannot finish.
 pub(crate) const MAX_EVENTS: u64 = 50_000_000;
 
@@ -350,6 +370,26 @@ struct Tally {
     excursion2: f64,
     /// Whether the photon has crossed the specimen's rim ([`BackingOrders::past_rim_only`]).
     past_rim: bool,
+    /// The rim walk's splitting level the photon has reached (see [`RIM_SPLIT_FRACTIONS`]).
+    level: usize,
+    /// Halves of split photons still to be walked.
+    pending: Vec<Split>,
+}
+
+/// A split photon's half, walked after the rest of its family.
+#[derive(Clone, Copy)]
+struct Split {
+    pos: Vec3,
+    d: Vec3,
+    layer: isize,
+    w: f64,
+    scattered: bool,
+    roulette: bool,
+    order: usize,
+    entry: (f64, f64),
+    excursion2: f64,
+    past_rim: bool,
+    level: usize,
 }
 
 impl Tally {
@@ -370,6 +410,8 @@ impl Tally {
             entry: (0.0, 0.0),
             excursion2: 0.0,
             past_rim: false,
+            level: 0,
+            pending: Vec::new(),
         }
     }
     fn merge(&mut self, o: &Tally) {
@@ -391,7 +433,7 @@ impl Tally {
 /// thread count.
 pub fn simulate(cfg: &SlabConfig, control: &Control) -> Result<SlabResult> {
     cfg.validate()?;
-    let batch = batch_size(cfg.n_photons);
+    let batch = run_batch_size(cfg);
     let n_batches = cfg.n_photons.div_ceil(batch);
     let tracer = Tracer::new(cfg);
     // collecting into a Result stops handing out batches after the first error
@@ -586,6 +628,8 @@ struct Tracer<'a> {
     orders: Option<BackingOrders>,
     /// [`BackingOrders::past_rim_only`].
     past_rim_only: bool,
+    /// Squared radii of [`RIM_SPLIT_FRACTIONS`] of the rim (∞ without a rim walk).
+    split_r2: [f64; 3],
 }
 
 impl<'a> Tracer<'a> {
@@ -623,6 +667,24 @@ impl<'a> Tracer<'a> {
             inv_cone_fraction: win.map_or(1.0, |w| 1.0 / w.cone_fraction()),
             orders: cfg.backing_orders,
             past_rim_only: cfg.backing_orders.is_some_and(|o| o.past_rim_only),
+            split_r2: RIM_SPLIT_FRACTIONS.map(|f| match win {
+                Some(w) if cfg.backing_orders.is_some_and(|o| o.past_rim_only) => {
+                    (f * w.specimen_radius).powi(2)
+                }
+                _ => f64::INFINITY,
+            }),
+        }
+    }
+
+    /// The rim walk's splitting level at `pos`: how many of the split radii lie inside it
+    /// before the rim is crossed; after, all of them and how many lie outside it.
+    #[inline]
+    fn rim_level(&self, pos: Vec3, past_rim: bool) -> usize {
+        let r2 = pos.x * pos.x + pos.y * pos.y;
+        if past_rim {
+            self.split_r2.len() + self.split_r2.iter().filter(|&&b| r2 < b).count()
+        } else {
+            self.split_r2.iter().filter(|&&b| r2 > b).count()
         }
     }
 
@@ -810,6 +872,8 @@ impl<'a> Tracer<'a> {
         t.order = 0;
         t.excursion2 = 0.0;
         t.past_rim = false;
+        t.level = 0;
+        t.pending.clear();
         // launch direction in the medium above
         let d_above = match cfg.incidence {
             Incidence::Normal => Vec3::Z,
@@ -842,102 +906,141 @@ impl<'a> Tracer<'a> {
         // `roulette` is set once the weighted photon's weight fell below the threshold
         let mut roulette = !weighted;
         let mut events: u64 = 0;
+        // the photon, then each half split off it (the rim walk's splitting), in turn
         loop {
-            let li = layer as usize;
-            let lc = &self.layers[li];
-            // free flight (eq. 2); +∞ in a non-interacting layer
-            let s = -rng.uniform_open0().ln() * lc.mfp;
-            let db = distance_to_faces(pos.z, d.z, lc.z_top, lc.z_bot);
-            count_event(&mut events, control, || {
-                format!(
-                    "layers[{li}] μt·d = {:.3e}",
-                    lc.sigma_t * (lc.z_bot - lc.z_top)
-                )
-            })?;
-            if s < db {
-                // interaction inside layer li (eqs. 2–4)
-                pos += d * s;
+            'walk: loop {
+                let li = layer as usize;
+                let lc = &self.layers[li];
+                // free flight (eq. 2); +∞ in a non-interacting layer
+                let s = -rng.uniform_open0().ln() * lc.mfp;
+                let db = distance_to_faces(pos.z, d.z, lc.z_top, lc.z_bot);
+                count_event(&mut events, control, || {
+                    format!(
+                        "layers[{li}] μt·d = {:.3e}",
+                        lc.sigma_t * (lc.z_bot - lc.z_top)
+                    )
+                })?;
+                if s < db {
+                    // interaction inside layer li (eqs. 2–4)
+                    pos += d * s;
+                    self.track_excursion(pos, t);
+                    if self.ends_at_rim(pos, w, ph, t) {
+                        break 'walk;
+                    }
+                    if roulette {
+                        if rng.uniform() >= lc.albedo {
+                            t.absorbed[li] += w;
+                            ph[ABS] += w;
+                            break 'walk;
+                        }
+                    } else {
+                        let dep = w * (1.0 - lc.albedo);
+                        t.absorbed[li] += dep;
+                        ph[ABS] += dep;
+                        w -= dep;
+                        if w < WEIGHT_THRESHOLD {
+                            roulette = true;
+                        }
+                    }
+                    // new direction from the phase function (eqs. 7–10); the second uniform
+                    // is drawn only for mixtures, the azimuth without trigonometry
+                    let u0 = rng.uniform();
+                    let cos_theta = match &lc.hg {
+                        Some(hg) => hg.sample_cos(u0),
+                        None => {
+                            let u1 = if lc.two_uniforms { rng.uniform() } else { 0.0 };
+                            cfg.layers[li].medium.phase.sample_cos([u0, u1])
+                        }
+                    };
+                    let (c, s, rho) = sample_azimuth_scaled_bits(|| rng.next_bits());
+                    d = rotate_direction_scaled(d, cos_theta, c, s, rho);
+                    scattered = true;
+                    // split after the interaction: each half flies on from here
+                    if self.past_rim_only {
+                        let level = self.rim_level(pos, t.past_rim);
+                        while t.level < level {
+                            t.level += 1;
+                            w *= 0.5;
+                            t.pending.push(Split {
+                                pos,
+                                d,
+                                layer,
+                                w,
+                                scattered,
+                                roulette,
+                                order: t.order,
+                                entry: t.entry,
+                                excursion2: t.excursion2,
+                                past_rim: t.past_rim,
+                                level: t.level,
+                            });
+                        }
+                    }
+                    continue;
+                }
+                // reach the interface
+                let down = d.z > 0.0;
+                pos += d * db;
+                pos.z = if down { lc.z_bot } else { lc.z_top };
                 self.track_excursion(pos, t);
                 if self.ends_at_rim(pos, w, ph, t) {
-                    return Ok(());
+                    break 'walk;
                 }
-                if roulette {
-                    if rng.uniform() >= lc.albedo {
-                        t.absorbed[li] += w;
-                        ph[ABS] += w;
-                        return Ok(());
-                    }
-                } else {
-                    let dep = w * (1.0 - lc.albedo);
-                    t.absorbed[li] += dep;
-                    ph[ABS] += dep;
-                    w -= dep;
-                    if w < WEIGHT_THRESHOLD {
-                        roulette = true;
+                let next = if down { layer + 1 } else { layer - 1 };
+                let eta_i = lc.eta;
+                let eta_t = self.eta_of(next);
+                let (r, cos_t) = reflectance_and_cos_t(d.z, eta_i, eta_t);
+                let outside = next < 0 || next >= n_layers;
+                let k = eta_i / eta_t;
+                let d_t = Vec3::new(d.x * k, d.y * k, if down { cos_t } else { -cos_t });
+                // Fresnel reflect-or-refract roulette at every interface, in both estimators
+                if r >= 1.0 || (r > 0.0 && rng.uniform() < r) {
+                    d.z = -d.z;
+                    continue;
+                }
+                d = d_t;
+                if outside && down && self.orders.is_some() {
+                    match self.backing_orders_bounce(rng, pos, &mut d, &mut w, ph, t) {
+                        Some(()) => {
+                            scattered = true;
+                            continue;
+                        }
+                        None => break 'walk,
                     }
                 }
-                // new direction from the phase function (eqs. 7–10); the second uniform
-                // is drawn only for mixtures, the azimuth without trigonometry
-                let u0 = rng.uniform();
-                let cos_theta = match &lc.hg {
-                    Some(hg) => hg.sample_cos(u0),
-                    None => {
-                        let u1 = if lc.two_uniforms { rng.uniform() } else { 0.0 };
-                        cfg.layers[li].medium.phase.sample_cos([u0, u1])
+                if outside && down && self.backing > 0.0 {
+                    // the backing under the stack (zero gap, in the medium below)
+                    let hit = self.backing_bounce(
+                        rng,
+                        pos,
+                        &mut d,
+                        &mut w,
+                        &mut roulette,
+                        scattered,
+                        ph,
+                        t,
+                    );
+                    match hit {
+                        Some(()) => {
+                            scattered = true;
+                            continue;
+                        }
+                        None => break 'walk,
                     }
-                };
-                let (c, s, rho) = sample_azimuth_scaled_bits(|| rng.next_bits());
-                d = rotate_direction_scaled(d, cos_theta, c, s, rho);
-                scattered = true;
-                continue;
+                }
+                if outside {
+                    self.exit(pos, d, w, scattered, ph, t);
+                    break 'walk;
+                }
+                layer = next;
             }
-            // reach the interface
-            let down = d.z > 0.0;
-            pos += d * db;
-            pos.z = if down { lc.z_bot } else { lc.z_top };
-            self.track_excursion(pos, t);
-            if self.ends_at_rim(pos, w, ph, t) {
+            let Some(h) = t.pending.pop() else {
                 return Ok(());
-            }
-            let next = if down { layer + 1 } else { layer - 1 };
-            let eta_i = lc.eta;
-            let eta_t = self.eta_of(next);
-            let (r, cos_t) = reflectance_and_cos_t(d.z, eta_i, eta_t);
-            let outside = next < 0 || next >= n_layers;
-            let k = eta_i / eta_t;
-            let d_t = Vec3::new(d.x * k, d.y * k, if down { cos_t } else { -cos_t });
-            // Fresnel reflect-or-refract roulette at every interface, in both estimators
-            if r >= 1.0 || (r > 0.0 && rng.uniform() < r) {
-                d.z = -d.z;
-                continue;
-            }
-            d = d_t;
-            if outside && down && self.orders.is_some() {
-                match self.backing_orders_bounce(rng, pos, &mut d, &mut w, ph, t) {
-                    Some(()) => {
-                        scattered = true;
-                        continue;
-                    }
-                    None => return Ok(()),
-                }
-            }
-            if outside && down && self.backing > 0.0 {
-                // the backing under the stack (zero gap, in the medium below)
-                let hit =
-                    self.backing_bounce(rng, pos, &mut d, &mut w, &mut roulette, scattered, ph, t);
-                match hit {
-                    Some(()) => {
-                        scattered = true;
-                        continue;
-                    }
-                    None => return Ok(()),
-                }
-            }
-            if outside {
-                self.exit(pos, d, w, scattered, ph, t);
-                return Ok(());
-            }
-            layer = next;
+            };
+            (pos, d, layer, w, scattered, roulette) =
+                (h.pos, h.d, h.layer, h.w, h.scattered, h.roulette);
+            (t.order, t.entry, t.excursion2, t.past_rim, t.level) =
+                (h.order, h.entry, h.excursion2, h.past_rim, h.level);
         }
     }
 
