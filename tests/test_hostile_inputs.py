@@ -392,9 +392,12 @@ def test_a_non_finite_result_is_an_error_naming_the_key(bad, key):
 def test_an_absurd_material_is_an_error_not_null(tmp_path, capsys):
     path = tmp_path / "opaque.toml"
     path.write_text(tomli_w.dumps({"materials": {"x": _material(mua=[1e6] * 3)}}))
+    pure = tmp_path / "absorber.toml"
+    pure.write_text(tomli_w.dumps({"materials": {"x": _material(mua=[1e6] * 3,
+                                                                mus=[0.0] * 3)}}))
     # a pure absorber read 0-45 (specular excluded) by the walks: no photon comes back, Y = 0
     # over both backings and CR = 0/0
-    code, out, err = run(capsys, ["shade", path, "--bands", "450,550", "--photons", "200",
+    code, out, err = run(capsys, ["shade", pure, "--bands", "450,550", "--photons", "300",
                                   "--solver", "monte-carlo", "--json"])
     assert code == 2 and out == "" and "the result's" in err, (out, err)
     # the layered solver keeps the light scattered once before it is absorbed (albedo about

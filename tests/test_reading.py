@@ -166,3 +166,20 @@ def test_typed_results_with_short_reprs():
     assert err.a == m.stderr["lab_white.a"] and m.measured("tp00").stderr == m.stderr["tp00"]
     assert len(repr(m)) < 300 and "±" in repr(m)
     assert json.loads(json.dumps(m.to_json()))["lab_white"] == list(m.lab_white)
+
+
+def test_a_monte_carlo_part_of_one_batch_is_refused(capsys):
+    # its standard error comes from the spread between batches: one batch has none (it read
+    # 0); the walks need more than the core's smallest batch, the rim walk's budget more
+    # than RIM_SHARE of its smallest batches
+    from dentalux.reading import engine
+
+    walks = int(engine._core.SLAB_MIN_BATCH)
+    rim = engine.RIM_SHARE * int(engine._core.SLAB_MIN_RIM_BATCH)
+    probe = ["shade", "enamel", "--instrument", "contact-probe-3mm", "--bands", "450,550,650",
+             "--json"]
+    for args, floor in (([*probe, "--solver", "monte-carlo"], walks), (probe, rim)):
+        code, out, err = run_main(capsys, *args, "--photons", str(floor))
+        assert code == 2 and out == "" and "standard error" in err and str(floor + 1) in err
+        code, out, _ = run_main(capsys, *args, "--photons", str(floor + 1))
+        assert code in (0, None) and json.loads(out)["photons"] == 3 * (floor + 1)

@@ -17,6 +17,8 @@ SLAB_WINDOW_KEYS: list[str]
 DIFFUSE_RUN_KEY: int
 TRANSMITTED_RUN_KEY: int
 RIM_RUN_KEY: int
+SLAB_MIN_BATCH: int
+SLAB_MIN_RIM_BATCH: int
 
 # One layer as Python passes it: dentalux.slab.Layer's fields in their order (mua, mus, g, n,
 # thickness, fd, lobes), built by Layer.as_tuple.

@@ -39,6 +39,14 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         dentalux_core::rng::TRANSMITTED_RUN_KEY,
     )?;
     m.add("RIM_RUN_KEY", dentalux_core::rng::RIM_RUN_KEY)?;
+    m.add(
+        "SLAB_MIN_BATCH",
+        dentalux_core::integrators::slab::MIN_BATCH,
+    )?;
+    m.add(
+        "SLAB_MIN_RIM_BATCH",
+        dentalux_core::integrators::slab::MIN_RIM_BATCH,
+    )?;
     m.add_function(wrap_pyfunction!(slab::slab_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(slab::slab_read_bands, m)?)?;
     m.add_function(wrap_pyfunction!(slab::slab_read_spectral, m)?)?;

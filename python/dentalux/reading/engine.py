@@ -185,6 +185,19 @@ def rim_photons(photons: int) -> int:
     return max(1, -(-int(photons) // RIM_SHARE))
 
 
+def check_batches(photons: int, rim: bool) -> None:
+    """Refuse a Monte Carlo part that would run as one batch: its standard error comes from
+    the spread between batches, and one batch has none (it read 0). The core's smallest
+    batch sets the floor: a walk needs more than SLAB_MIN_BATCH photons per band, a rim walk
+    more than RIM_SHARE x SLAB_MIN_RIM_BATCH."""
+    floor = RIM_SHARE * int(_core.SLAB_MIN_RIM_BATCH) if rim else int(_core.SLAB_MIN_BATCH)
+    if int(photons) <= floor:
+        what = "the rim walk's budget" if rim else "the walks"
+        raise ValueError(
+            f"photons = {int(photons)} per band is too few for a standard error: "
+            f"{what} would run as one batch; allowed at least {floor + 1} photons per band")
+
+
 def _solve_key(band_stacks, inst, n_below: float) -> tuple:
     geometry = inst.window(0.0) if inst.fibres is None else _regions(inst)
     return (tuple(tuple(lay.as_tuple(i) for i, lay in enumerate(stack))
@@ -292,6 +305,7 @@ def solved(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
             mc_photons = 0
         else:
             limits.check_slab(photons, threads, seed=seed)
+            check_batches(photons, rim=True)
             survival = _survival(rb_black, rb_white)
             key = int(_core.RIM_RUN_KEY)
             t_key = key + int(_core.TRANSMITTED_RUN_KEY)
@@ -330,6 +344,8 @@ def windowed(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
     if walks not in WALKS:
         raise ValueError(f"walks = {walks!r}: allowed {', '.join(WALKS)}")
     shared = walks == "shared"
+    if not shared:
+        check_batches(photons, rim=False)
     if shared and not can_share(band_stacks):
         raise ValueError("walks = 'shared': a layer's refractive index differs between bands; "
                          "use walks = 'per-band'")

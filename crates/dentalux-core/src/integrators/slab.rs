@@ -44,7 +44,7 @@ use std::f64::consts::PI;
 /// batch), so the numbers do not depend on how batches are spread over threads.
 pub const BATCH: u64 = 8192;
 /// Fewest photons per batch (below this, per-batch set-up would show).
-const MIN_BATCH: u64 = 256;
+pub const MIN_BATCH: u64 = 256;
 /// Batches a run is cut into when it has enough photons, so that slow cases (e.g. 100 000
 /// photons of a thick dentin slab) still keep many threads busy to the end.
 const TARGET_BATCHES: u64 = 64;
@@ -57,7 +57,7 @@ pub fn batch_size(n_photons: u64) -> u64 {
 /// Fewest photons per batch of a rim walk ([`BackingOrders::past_rim_only`]): each of its
 /// photons is split into several walks, so small batches cost little set-up, and a run of a
 /// few hundred photons still has [`REPLICATES`] batches for its standard error.
-const MIN_RIM_BATCH: u64 = 8;
+pub const MIN_RIM_BATCH: u64 = 8;
 
 /// [`batch_size`], or for a rim walk the same with [`MIN_RIM_BATCH`].
 fn run_batch_size(cfg: &SlabConfig) -> u64 {
