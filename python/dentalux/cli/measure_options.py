@@ -30,10 +30,11 @@ Precision = Annotated[float, typer.Option(help="target standard error of the rea
                                                "photons instead of --photons")]
 Seed = Annotated[int, typer.Option(help="random seed")]
 Solver = Annotated[str, typer.Option(help="monte-carlo (slab walks) | layered (deterministic "
-                                          "transport solver; --photons then go to the walk "
-                                          "that corrects for the specimen's rim; needs a "
-                                          "beam along the normal) | auto (layered where it "
-                                          "holds)")]
+                                          "transport solver; --photons are then the budget "
+                                          "of the walk that corrects for the specimen's rim; "
+                                          "a d/8 instrument's 8 deg beam is read as normal) "
+                                          "| auto (layered where the beam is along the "
+                                          "normal)")]
 Estimator = Annotated[str, typer.Option(help="weighted | analog")]
 Observer = Annotated[str, typer.Option(help="'2' (CIE 1931) or '10' (CIE 1964)")]
 Illuminant = Annotated[str, typer.Option(help="illuminant (colour-science name)")]

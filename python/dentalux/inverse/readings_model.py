@@ -58,7 +58,7 @@ class Problem:
         self.cs = system(readings.illuminant, str(readings.observer))
         self.rec = Reconstruction(self.bands, grid=self.cs.wavelengths, basis="hold")
         self.k1 = 0.0 if inst.spec.specular == "excluded" else specular(n, 1.0)
-        # use_layered refuses solver 'layered' where the beam is oblique (d/8)
+        # 'auto' reads a d/8 instrument by the walks; 'layered' reads its 8 deg beam as normal
         self.layered = model == "mc" and engine.use_layered(inst, solver)
         self.accuracy = ACCURACY if self.layered else 0.0
         self.evaluations = 0
