@@ -269,11 +269,10 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
                   estimator=estimator, illuminant=illuminant, observer=observer,
                   op_backing=op_backing, reconstruction=reconstruction, threads=threads,
                   walks=walks, solver=solver)
-        photons, plan = photons_for_precision(specimen, precision, **kw)
+        photons, plan, pilot = _precision_plan(specimen, precision, **kw)
         # a reading without a Monte Carlo part (no rim walk) is its own pilot
-        m = plan.pop("reading") if plan["noise_free"] else read(
-            specimen, photons=photons, progress=progress, **kw)
-        plan.pop("reading", None)
+        m = pilot if plan["noise_free"] else read(specimen, photons=photons,
+                                                  progress=progress, **kw)
         m.precision = {**plan, "achieved": reading_precision(m)}
         return m
     if isinstance(specimen, (str, bytes)) or not hasattr(specimen, "__iter__"):
@@ -394,13 +393,20 @@ def photons_for_precision(specimen, precision, seed: int = 1, name: str = "preci
     :data:`dentalux.limits.MAX_READING_CPU_SECONDS` is refused before it starts, with the
     estimate. Returns the count and the plan (pilot numbers and estimates); where the pilot
     walked no photons (the layered solver on a laterally infinite specimen: no noise) the
-    plan says ``noise_free`` and carries the pilot as its ``reading``."""
+    plan says ``noise_free``."""
+    need, plan, _ = _precision_plan(specimen, precision, seed, name, **kw)
+    return need, plan
+
+
+def _precision_plan(specimen, precision, seed: int = 1, name: str = "precision",
+                    **kw) -> tuple[int, dict, DentalMetrics]:
+    """:func:`photons_for_precision`, and its pilot reading."""
     target = check_precision(precision, name)
     pilot = read(specimen, photons=PILOT_PHOTONS, seed=int(seed) + PILOT_SEED_OFFSET, **kw)
     if pilot.photons == 0:
         return PILOT_PHOTONS, {"requested": target, "noise_free": True, "pilot_photons": 0,
                                "pilot_precision": 0.0, "photons_per_band": 0,
-                               "estimated_cpu_seconds": pilot.cpu_seconds, "reading": pilot}
+                               "estimated_cpu_seconds": pilot.cpu_seconds}, pilot
     p0 = reading_precision(pilot)
     need = int(np.ceil(PILOT_PHOTONS * PRECISION_MARGIN * (p0 / target) ** 2))
     need = max(need, PILOT_PHOTONS)
@@ -415,7 +421,7 @@ def photons_for_precision(specimen, precision, seed: int = 1, name: str = "preci
             f"(about {cpu:.3g} CPU-s; the pilot of {PILOT_PHOTONS} read {p0:.3g}); allowed at "
             f"most {limits.MAX_SLAB_PHOTONS:.3g} photons and "
             f"{limits.MAX_READING_CPU_SECONDS:g} CPU-s: ask for a coarser precision")
-    return need, plan
+    return need, plan, pilot
 
 
 def metrics(material, thickness: float, bands=DEFAULT_BANDS, backing_black=None, backing_white=None,

@@ -252,7 +252,6 @@ def optimise(target, layers, total=None, substrate: str = "dentin", cement=None,
         middle = [(m, 0.5 * (lo + hi)) for m, (lo, hi) in zip(parts, ranges, strict=True)]
         photons, plan = dental.photons_for_precision(
             middle + tail, precision, seed=seed, instrument=inst, **common)
-        plan.pop("reading", None)
         verify_photons = photons
         # the fast model's photons again, now that the precision has chosen them
         limits.check_design_work(nodes or DEFAULT_NODES[len(spec)], len(spec), len(wl),

@@ -211,9 +211,9 @@ def check_batches(photons: int, rim: bool) -> None:
 
 
 def _solve_key(band_stacks, inst, n_below: float) -> tuple:
-    geometry = inst.window(0.0) if inst.fibres is None else _regions(inst)
+    # what the solve reads through (the specimen's rim is the walk's, not the solver's)
     return (tuple(tuple(lay.as_tuple(i) for i, lay in enumerate(stack))
-                  for stack in band_stacks), geometry, float(n_below))
+                  for stack in band_stacks), _regions(inst), float(n_below))
 
 
 def _solve_orders(specimens, inst, n_below: float, cb, done: int,

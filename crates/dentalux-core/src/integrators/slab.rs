@@ -61,7 +61,7 @@ pub const MIN_RIM_BATCH: u64 = 8;
 
 /// [`batch_size`], or for a rim walk the same with [`MIN_RIM_BATCH`].
 fn run_batch_size(cfg: &SlabConfig) -> u64 {
-    if cfg.backing_orders.is_some_and(|o| o.past_rim_only) {
+    if cfg.is_rim_walk() {
         (cfg.n_photons / TARGET_BATCHES).clamp(MIN_RIM_BATCH, BATCH)
     } else {
         batch_size(cfg.n_photons)
@@ -281,6 +281,11 @@ impl SlabResult {
 }
 
 impl SlabConfig {
+    /// Whether this run is a rim walk ([`BackingOrders::past_rim_only`]).
+    pub fn is_rim_walk(&self) -> bool {
+        self.backing_orders.is_some_and(|o| o.past_rim_only)
+    }
+
     /// Check every field; messages name the field and its allowed range.
     pub fn validate(&self) -> Result<()> {
         if self.layers.is_empty() {
@@ -628,7 +633,8 @@ struct Tracer<'a> {
     orders: Option<BackingOrders>,
     /// [`BackingOrders::past_rim_only`].
     past_rim_only: bool,
-    /// Squared radii of [`RIM_SPLIT_FRACTIONS`] of the rim (∞ without a rim walk).
+    /// Squared radii of [`RIM_SPLIT_FRACTIONS`] of the rim (∞ without a window), read only
+    /// in a rim walk.
     split_r2: [f64; 3],
 }
 
@@ -666,13 +672,9 @@ impl<'a> Tracer<'a> {
             backing: win.map_or(0.0, |w| w.backing),
             inv_cone_fraction: win.map_or(1.0, |w| 1.0 / w.cone_fraction()),
             orders: cfg.backing_orders,
-            past_rim_only: cfg.backing_orders.is_some_and(|o| o.past_rim_only),
-            split_r2: RIM_SPLIT_FRACTIONS.map(|f| match win {
-                Some(w) if cfg.backing_orders.is_some_and(|o| o.past_rim_only) => {
-                    (f * w.specimen_radius).powi(2)
-                }
-                _ => f64::INFINITY,
-            }),
+            past_rim_only: cfg.is_rim_walk(),
+            split_r2: RIM_SPLIT_FRACTIONS
+                .map(|f| win.map_or(f64::INFINITY, |w| (f * w.specimen_radius).powi(2))),
         }
     }
 

@@ -37,7 +37,7 @@ MODES_BY_K = ((0.0, 1), (0.3, 3), (1.5, 4), (12.0, 5), (np.inf, 4))
 SINGLE_SCATTER = True
 
 #: the solver's accuracy, relative to a reading: its discretisation against a converged
-#: solution (more nodes, four more modes, twice the spatial frequencies) is at most 0.1 % on
+#: solution (more nodes, four more modes, more spatial frequencies) is at most 0.1 % on
 #: discs (benchmarks/layered_settings.py) and was 0.4 % on a fibre probe's ring, and it
 #: agreed with 2 M-photon slab walks within their noise (0.1-0.3 %) on 16 cases
 #: (docs/notes/2026-12-07-layered-solver.md)
@@ -161,8 +161,8 @@ def responses_many(specimens, n_above: float, n_below: float, cone_deg, ks=K_NOD
             res = response(bs, ks[idx], n_above, n_below, cone_deg, modes, **settings)
             for f in FIELDS:
                 out[f][:, idx] = getattr(res, f)
-    for bs, out in zip(specimens, outs, strict=True):
-        if cone_deg is not None and single_scatter:
+    if cone_deg is not None and single_scatter:
+        for bs, out in zip(specimens, outs, strict=True):
             out["r_cone"] += single.correction(bs, ks, n_above, cone_deg,
                                                settings.get("order", ORDER))
     return [Response(k=ks, **out) for out in outs]

@@ -79,23 +79,15 @@ def lens(d: float, a: float, b: float) -> float:
 def pairs_overlap(pairs) -> float:
     """Fraction of the lit power falling inside the read regions, over every pair (a shifted
     pair's regions are discs)."""
-    total = None
-    for lit, view, d, w in pairs:
-        term = overlap(lit, view) if d == 0 else lens(d, lit[1], view[1]) / (np.pi * lit[1] ** 2)
-        term = term if w == 1.0 else w * term
-        total = term if total is None else total + term
-    return total
+    return sum(w * (overlap(lit, view) if d == 0
+                    else lens(d, lit[1], view[1]) / (np.pi * lit[1] ** 2))
+               for lit, view, d, w in pairs)
 
 
 def pairs_kernel(k, pairs) -> np.ndarray:
-    """(1/2 pi) k sum_pairs w S(k) W(k) J0(k d) (module doc)."""
-    total = None
-    for lit, view, d, w in pairs:
-        term = disc_kernel(k, lit, view)
-        term = term if d == 0 else term * j0(np.asarray(k, float) * d)
-        term = term if w == 1.0 else w * term
-        total = term if total is None else total + term
-    return total
+    """(1/2 pi) k sum_pairs w S(k) W(k) J0(k d) (module doc; J0(0) = 1 exactly)."""
+    k = np.asarray(k, float)
+    return sum(w * (disc_kernel(k, lit, view) * j0(k * d)) for lit, view, d, w in pairs)
 
 
 @lru_cache(maxsize=32)
