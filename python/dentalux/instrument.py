@@ -486,11 +486,6 @@ def _from_table(name: str, table: dict, where: str, builtin: bool = False,
                              f"([[instruments.{name}.fibres]])")
         layout = fibre_layout.parse({"tip_diameter_mm": table.get("tip_diameter_mm"),
                                      "fibres": table["fibres"]}, f"{key}.fibres")
-        if "specimen_diameter_mm" in table:
-            raise ValueError(f"{key}.specimen_diameter_mm: a fibre probe is read by the "
-                             "layered solver on a laterally infinite specimen (a rim's "
-                             "correction is a slab walk, which cannot follow separate "
-                             "fibres): leave it out")
     for k in ("geometry",) + (() if layout else ("illuminated_diameter_mm",
                                                  "viewed_diameter_mm")):
         if k not in table:
