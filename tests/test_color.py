@@ -1,6 +1,8 @@
 """Colorimetry: colour-science round trips, Sharma's CIEDE2000 pairs, images and files."""
 
 import json
+import subprocess
+import sys
 
 import colour
 import numpy as np
@@ -117,3 +119,14 @@ def test_write_images(tmp_path):
         color.write_images(cube, bands, tmp_path, regions={"bad": [0, 0, 9, 6]})
     with pytest.raises(ValueError, match="radiance shape"):
         color.write_images(cube[..., :3], bands, tmp_path)
+
+
+def test_a_reading_does_not_load_colour_sciences_plotting():
+    # colour-science's __init__ imports its plotting (pyplot, fonts: about 0.5 s of every
+    # command line call); dentalux._lazy defers it until one of its attributes is read
+    code = ("import sys; from dentalux import dental; "
+            "dental.read([('enamel', 1.0)], bands=[450, 550, 650]); "
+            "assert 'colour' in sys.modules and 'matplotlib.pyplot' not in sys.modules; "
+            "import colour; assert callable(colour.plotting.plot_single_colour_swatch); "
+            "assert 'matplotlib.pyplot' in sys.modules")
+    subprocess.run([sys.executable, "-c", code], check=True)

@@ -7,7 +7,7 @@ import pytest
 from cli_run import run_main
 from dentalux import _core, dental, instrument, materials, reading
 from dentalux.reading import engine, layered
-from dentalux.reading.layered import stack
+from dentalux.reading.layered import stack, window
 from dentalux.slab import Layer
 
 KEYS = engine.WINDOW_KEYS
@@ -294,3 +294,26 @@ def test_a_response_that_does_not_spread_reads_the_exact_overlap():
     got = engine.measure(film, wl, inst, np.zeros(2), np.ones(2), 2000, 1, solver="layered")
     assert np.all(np.abs(got.values[1] - 1.0) < 1e-6), got.values
     assert np.all(np.abs(got.values[0]) < 1e-12)
+
+
+@pytest.mark.parametrize("name", ["45-0", "d8-benchtop-sav", "noncontact", PROBE])
+def test_a_window_solves_only_the_spatial_frequencies_it_weighs(name):
+    # the last nodes whose window weights (with the tail's) sum within NODE_TOLERANCE of the
+    # overlap are left unsolved; the response being largest at k = 0, the readings over
+    # black and white and in transmission move by less than that fraction of themselves
+    cone, lit, view, pairs = engine._regions(instrument.get(name))
+    ks = window.nodes_for(window.as_pairs(lit, view, pairs))
+    assert (len(ks) < len(stack.K_NODES)) == (name != PROBE), ks  # a 3 mm disc needs all
+    poly = np.array([[rb ** np.arange(ORDERS)] for rb in (0.0, 0.85)])[:, 0]
+    for parts in ([("enamel", 1.0)], [("dentin", 2.0)], [("enamel", 0.6), ("dentin", 0.9)]):
+        for wl in (400.0, 700.0):
+            bands = [_layers(parts, wl)]
+            local = layered.local_parts(bands, 1.0, 1.0)
+            first = _core.fresnel_reflectance([1.0], 1.0, bands[0][0].n)[0]
+            full, cut = (layered.order_sums(layered.responses(bands, 1.0, 1.0, cone, ks=nodes),
+                                            local, first, lit, view, engine.MAX_ORDER, KEYS,
+                                            pairs)[0] for nodes in (stack.K_NODES, ks))
+            read = [KEYS.index(k) for k in ("viewed_reflectance", "viewed_cone_reflectance",
+                                             "viewed_transmittance")]
+            a, b = (poly @ full)[:, read], (poly @ cut)[:, read]  # (backing, key)
+            assert np.all(np.abs(b - a) <= window.NODE_TOLERANCE * np.abs(a)), (parts, wl)

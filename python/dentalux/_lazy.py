@@ -1,10 +1,13 @@
-"""A module imported on first use: colour-science takes about 1.2 s to import (it pulls in
-its plotting and matplotlib), which every command line call paid at start-up, `--help`
-included, though only colour and spectral commands use it."""
+"""Modules imported on first use. colour-science takes about 1 s to import, half of it its
+``colour.plotting`` (matplotlib's pyplot, fonts, colour-space diagrams), which its
+``__init__`` imports although dentalux never calls it: every command line call paid that at
+start-up, `--help` included. Here ``colour`` is imported when an attribute is first read,
+and its ``plotting`` subpackage only when one of its own attributes is."""
 
 from __future__ import annotations
 
 import importlib
+import sys
 from types import ModuleType
 
 
@@ -17,8 +20,26 @@ class LazyModule(ModuleType):
 
     def __getattr__(self, attr: str):
         if self._module is None:
+            if sys.modules.get(self.__name__) is self:
+                del sys.modules[self.__name__]  # the real module takes its place there
             self._module = importlib.import_module(self.__name__)
         return getattr(self._module, attr)
 
 
-colour = LazyModule("colour")
+def _colour() -> ModuleType:
+    # a stand-in registered first is what colour's own `from colour import plotting` finds
+    # (Python looks in sys.modules before importing a submodule); a plain attribute read on
+    # the stand-in, as the import system's, triggers nothing it does not define
+    if "colour" not in sys.modules:
+        sys.modules.setdefault("colour.plotting", LazyModule("colour.plotting"))
+    return importlib.import_module("colour")
+
+
+class _Colour(LazyModule):
+    def __getattr__(self, attr: str):
+        if self._module is None:
+            self._module = _colour()
+        return getattr(self._module, attr)
+
+
+colour = _Colour("colour")

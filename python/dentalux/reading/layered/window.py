@@ -27,7 +27,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.special import j0, j1
 
-from dentalux.reading.layered.stack import Response
+from dentalux.reading.layered.stack import K_NODES, Response
 
 # the k integral: the kernel oscillates with period 2 pi / (largest radius, plus the pair's
 # distance where the regions are not concentric) and falls as
@@ -44,6 +44,13 @@ TAIL_FACTOR = 8.0
 TAIL_EXPONENTS = np.linspace(0.0, 1.0, 5)
 # the responses are splined in asinh(k / K_SCALE), which resolves their fall near k = 0
 K_SCALE = 0.05
+#: a window reads only the spatial frequencies its kernel weighs: the last nodes are left
+#: unsolved while their weights and the tail's, together, stay within NODE_TOLERANCE of the
+#: window's overlap. A response is largest at k = 0 (the point spread function is positive),
+#: so a node of weight w moves the reading by at most w times the k = 0 response; against
+#: every node solved this moves the presets' readings by at most 2e-4 of themselves
+#: (tests/test_layered.py), far inside stack.ACCURACY
+NODE_TOLERANCE = 1e-3
 
 
 def disc_kernel(k, lit: tuple[float, float], view: tuple[float, float]) -> np.ndarray:
@@ -109,6 +116,21 @@ def _weights(ks: tuple, pairs: tuple) -> tuple[np.ndarray, np.ndarray, float]:
     tails = np.array([(k_last / far) ** p @ far_kernel + (1 - p) * beyond
                       for p in TAIL_EXPONENTS])
     return spline, tails, over
+
+
+@lru_cache(maxsize=32)
+def nodes_for(pairs: tuple, ks: tuple = K_NODES) -> tuple:
+    """The spatial frequencies of ``ks`` that the window ``pairs`` (:func:`as_pairs`) needs
+    solved: all but the last nodes whose weights, with the tail's, sum within NODE_TOLERANCE
+    of its overlap (none dropped where the regions do not overlap, as separate fibres)."""
+    spline, tails, over = _weights(tuple(map(float, ks)), pairs)
+    if over <= 0:
+        return tuple(ks)
+    beyond = np.cumsum(np.abs(spline)[::-1])[::-1] + np.abs(tails).max()  # from node j on
+    keep = len(ks)
+    while keep > 3 and beyond[keep - 1] <= NODE_TOLERANCE * over:
+        keep -= 1
+    return tuple(ks[:keep])
 
 
 def tail_exponent(ks, rest: np.ndarray) -> np.ndarray:
