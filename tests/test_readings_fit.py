@@ -62,11 +62,11 @@ def test_km_recovers_its_own_readings_and_reports_identifiability(tmp_path, caps
     wl = [450, 550, 650]
     rows = []
     inst = instrument.get(INST)
-    k1 = 0.0 if inst.spec.specular == "excluded" else rf.specular(1.5, 1.0)
+    sce = inst.spec.specular == "excluded"
     for t in (0.5, 1.0):
         for b in ("black", "white"):
             rb = getattr(inst, f"backing_{b}")
-            r = rf.km_reflectance(mua, mus, 0.8, 1.5, t, rb, k1)
+            r = rf.km_reflectance(mua, mus, 0.8, 1.5, t, rb, sce)
             rows.append(f"{t},{b}," + ",".join(f"{x:.8f}" for x in r))
     f = tmp_path / "km.csv"
     f.write_text("thickness_mm,backing," + ",".join(f"r{w}" for w in wl) + "\n"
@@ -94,6 +94,23 @@ def test_km_recovers_its_own_readings_and_reports_identifiability(tmp_path, caps
     assert code == 0, err
     assert json.loads(stdout)["identifiable"] is False
     assert "cannot pin both" in err
+
+
+@pytest.mark.parametrize("diffuse_only", [False, True])
+def test_km_reflectance_is_the_km_model_of_a_disc_in_air(diffuse_only):
+    """The readings' Kubelka-Munk over a backing of reflectance k2 (the disc's bottom face
+    seen from inside) is the transport fit's Kubelka-Munk of the disc in air: the entering
+    light loses k1 at the face whether or not the instrument sees the specular (SCE, 45/0
+    and contact probes: the old form dropped 1 - k1 there and read 4 % too bright)."""
+    from dentalux.inverse.models import Sample
+    from dentalux.inverse.models.boundary import moments
+    from dentalux.inverse.models.km import KubelkaMunk
+
+    mua, mus, t = np.array([0.02, 0.1, 0.5]), np.array([3.0, 10.0, 20.0]), 0.7
+    _, tr = KubelkaMunk().forward(mua, mus, Sample(g=0.8, n=1.5, thickness=t,
+                                                   diffuse_only=diffuse_only))
+    r = rf.km_reflectance(mua, mus, 0.8, 1.5, t, moments(1.5, 1.0)[0], diffuse_only)
+    assert np.allclose(r, tr, rtol=1e-12, atol=0), (r, tr)
 
 
 def _layered(mat, thickness, bands=BANDS, seed=12):
@@ -153,7 +170,7 @@ def test_round_trip_shade_readings_fit_predicts_another_thickness(tmp_path, caps
                                 getattr(truth, f"lab_{b}"))) for b in ("black", "white"))
     # Kubelka-Munk's own prediction (no instrument): its model at 1.5 mm
     own = max(float(delta_e00(prob.lab(rf.km_reflectance(
-        km.mua, km.mus, 0.8, 1.5, 1.5, prob.rg(b), prob.k1)), getattr(truth, f"lab_{b}")))
+        km.mua, km.mus, 0.8, 1.5, 1.5, prob.rg(b), prob.diffuse_only)), getattr(truth, f"lab_{b}")))
         for b in ("black", "white"))
     print(f"1.5 mm: mc fit {de:.3f} ΔE00 (allowed {tol:.3f}); KM fit: its own model "
           f"{own:.2f}, its coefficients read through the instrument {de_km:.2f} ΔE00")
@@ -225,11 +242,10 @@ def test_monte_carlo_solver_and_its_refusals(tmp_path, capsys):
 
 def _km_rows(mua, mus, conditions, wl=(450, 550, 650)):
     inst = instrument.get(INST)
-    k1 = 0.0 if inst.spec.specular == "excluded" else rf.specular(1.5, 1.0)
     rows = []
     for t, b in conditions:
         r = rf.km_reflectance(np.asarray(mua), np.asarray(mus), 0.8, 1.5, t,
-                              getattr(inst, f"backing_{b}"), k1)
+                              getattr(inst, f"backing_{b}"), inst.spec.specular == "excluded")
         rows.append(f"{t},{b}," + ",".join(f"{x:.8f}" for x in r))
     return "thickness_mm,backing," + ",".join(f"r{w}" for w in wl) + "\n" + "\n".join(rows) + "\n"
 

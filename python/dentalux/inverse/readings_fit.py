@@ -15,8 +15,9 @@ Two forward models of the same readings (:mod:`dentalux.readings`,
 - ``km``: Kubelka–Munk with the Saunderson correction, the field's baseline. A disc of
   thickness X on a backing of reflectance R_g has, with a = 1 + K/S, b = sqrt(a² − 1),
   R = (1 − R_g (a − b coth bSX)) / (a − R_g + b coth bSX) inside its faces; the faces add
-  R_m = k1 + (1 − k1)(1 − k2) R / (1 − k2 R) (k1 the normal Fresnel reflectance, counted
-  only where the geometry includes the specular reflection; k2 the diffuse internal
+  R_m = k1 + (1 − k1)(1 − k2) R / (1 − k2 R) (k1 the normal Fresnel reflectance: its own
+  term only where the geometry includes the specular reflection, the entering light's
+  1 − k1 always; k2 the diffuse internal
   reflectance, :func:`dentalux.inverse.models.boundary.moments`). The backing's R_g is the
   instrument's, used as it is. K and S map to the transport coefficients as in
   :mod:`dentalux.inverse.models.km`: K = 2 μa, S = (3/4) μs (1 − g). Kubelka–Munk knows no
@@ -57,7 +58,6 @@ import numpy as np
 
 from dentalux.color import delta_e00, delta_e00_scale
 from dentalux.inverse import readings_smooth
-from dentalux.inverse.models.boundary import specular  # noqa: F401 (tests, callers)
 from dentalux.inverse.readings_model import (
     TABLE_PHOTON_FRACTION,
     Problem,
