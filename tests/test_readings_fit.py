@@ -323,3 +323,27 @@ def _noise_de(data, sd):
     prob = rf.Problem(data, instrument.get(INST), 0.8, 1.5, "km", 0, 1, data.wavelength_nm)
     return max(float(rf.delta_e00_scale(prob.lab(r.spectrum), rf._lab_spread(
         prob, r.spectrum, np.full(len(r.spectrum), sd)))) for r in data.rows)
+
+
+def test_intervals_widen_with_a_misfit_beyond_the_assumed_spread(tmp_path):
+    """Kubelka-Munk readings with noise 0.01 per band and no sd columns (the fit assumes
+    0.003): the coefficients' standard deviations are widened by the residuals' chi-square per
+    degree of freedom, so the fit's error from the truth is about one of them (the median
+    |z| of a normal deviate is 0.67; the unscaled intervals, three times too narrow, gave 2.0
+    on these readings)."""
+    wl = list(range(400, 710, 10))
+    x = (np.asarray(wl) - 550.0) / 100.0
+    mua, mus = 0.1 * np.exp(-0.8 * x), 10.0 * np.exp(-0.3 * x)
+    rng = np.random.default_rng(7)
+    lines = _km_rows(mua, mus, [(t, b) for t in (0.3, 0.6, 1.0) for b in ("black", "white")],
+                     wl).splitlines()
+    noisy = [lines[0]] + [",".join(c if i < 2 else f"{float(c) + rng.normal(0, 0.01):.6f}"
+                                   for i, c in enumerate(ln.split(","))) for ln in lines[1:]]
+    f = tmp_path / "noisy.csv"
+    f.write_text("\n".join(noisy) + "\n")
+    res = rf.fit(readings.load(f), INST, g=0.8, n=1.5, model="km")
+    z = np.concatenate([np.log(fit / true) / (np.log(ci[:, 1] / fit) / 1.96)
+                        for fit, ci, true in ((res.mua, res.mua_ci, mua),
+                                              (res.mus, res.mus_ci, mus))])
+    print(f"median |z| {np.median(np.abs(z)):.2f} over {z.size} coefficients")
+    assert 0.4 < np.median(np.abs(z)) < 1.2
