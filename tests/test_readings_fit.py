@@ -43,6 +43,7 @@ GOOD = ("thickness_mm,backing,L,a,b\n0.5,black,40,-1,2\n0.5,white,70,1,8\n"
     ("thickness_mm,backing,L,a,b\n0.5,black,50,0,0\n0.5,white,40,0,0\n",
      "line 3: column L = 40 over white is darker"),
     ("thickness_mm,backing,L,a,b,foo\n0.5,black,50,0,0,1\n", "unknown column 'foo'"),
+    ("thickness_mm,backing,L,a,b,L\n0.5,black,40,0,0,90\n", "line 1: column 'L' appears twice"),
     ("thickness_mm,backing,L,a,b,sd_L\n0.5,black,50,0,0,1\n", "column sd_L without sd_a, sd_b"),
     ("thickness_mm,backing,r500,r510,sd_r510\n0.5,black,0.3,0.3,0.01\n",
      "column sd_r510 without sd_r500: give the spread of every column"),
