@@ -237,6 +237,12 @@ def load(path, illuminant: str | None = None, observer: str | None = None) -> Re
     _check_coverage(out, wl or list(LAB_COVERAGE_NM), where)
     ill = illuminant or _uniform(rows, "illuminant", where, "D65")
     obs = observer or _uniform(rows, "observer", where, "2")
+    from dentalux.color import system
+
+    try:  # checked here, where the error can name the file
+        system(ill, str(obs))
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from None
     return Readings(path=str(p), rows=out, form="spectral" if spectral else "lab",
                     wavelength_nm=wl, illuminant=ill, observer=str(obs),
                     sha256=hashlib.sha256(p.read_bytes()).hexdigest())
