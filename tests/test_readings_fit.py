@@ -43,6 +43,7 @@ GOOD = ("thickness_mm,backing,L,a,b\n0.5,black,40,-1,2\n0.5,white,70,1,8\n"
     ("thickness_mm,backing,L,a,b\n0.5,black,50,0,0\n0.5,white,40,0,0\n",
      "line 3: column L = 40 over white is darker"),
     ("thickness_mm,backing,L,a,b,foo\n0.5,black,50,0,0,1\n", "unknown column 'foo'"),
+    ("thickness_mm,backing,r500,L\n0.5,black,0.3,140\n", "missing column(s) a, b"),
     ("thickness_mm,backing,L,a,b,illuminant\n0.5,black,40,0,0,D99\n",
      "r.csv: illuminant = 'D99': allowed"),
     ("thickness_mm,backing,L,a,b,observer\n0.5,black,40,0,0,7\n", "r.csv: observer = '7'"),

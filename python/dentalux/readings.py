@@ -193,7 +193,7 @@ def load(path, illuminant: str | None = None, observer: str | None = None) -> Re
     missing = [c for c in ("thickness_mm", "backing") if c not in header]
     spectral = [c for c in header if _SPECTRAL.match(c)]
     has_lab = all(c in header for c in "Lab")
-    if not spectral and not has_lab:
+    if not (spectral or has_lab) or any(c in header for c in "Lab"):  # L, a, b go together
         missing += [c for c in "Lab" if c not in header]
     if missing:
         raise ValueError(f"{where}: missing column(s) {', '.join(missing)}: a readings file "
