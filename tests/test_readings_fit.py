@@ -222,8 +222,7 @@ def test_round_trip_cielab_only(tmp_path, capsys):
 
 def test_monte_carlo_solver_and_its_refusals(tmp_path, capsys):
     """--solver monte-carlo keeps the Monte Carlo fit (its noise reported); auto picks the
-    solver by the beam; --solver layered through a d/8 instrument, and --solver without
-    --readings, are refused."""
+    solver by the beam; --solver without --readings, and an unknown solver, are refused."""
     f = tmp_path / "r.csv"
     f.write_text(_km_rows([0.3, 0.1, 0.05], [12.0, 10.0, 9.0],
                           [(0.5, "black"), (0.5, "white")]))
