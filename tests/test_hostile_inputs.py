@@ -522,3 +522,14 @@ def test_a_quoted_field_may_span_lines(tmp_path):
     p.write_text('name,thickness_mm,note\na,1.0,"two\nlines"\nb,2.0,x\n')
     _, rows = inputs.read_csv(p)
     assert [r["note"] for r in rows] == ["two\nlines", "x"] and rows[1]["_line"] == 4
+
+
+def test_a_column_named_twice_is_refused(tmp_path):
+    """A header naming a column twice is refused naming the file, the line and the column
+    (dict(zip()) kept the last copy and ignored the first)."""
+    from dentalux import inputs
+
+    p = tmp_path / "t.csv"
+    p.write_text("# note\nname,L,a,b,L\nA1,70,0,10,90\n")
+    with pytest.raises(ValueError, match=r"t\.csv: line 2: column 'L' appears twice"):
+        inputs.read_csv(p, comments=True)

@@ -22,12 +22,12 @@ CARD_AT = {450: 0.74, 550: 0.81, 650: 0.86}  # linear between the card's rows
 def _km_rows(backing_of, mua=(0.3, 0.1, 0.05), mus=(12.0, 10.0, 9.0)):
     """Kubelka-Munk readings at 0.5 and 1.0 mm over black and over the card."""
     inst = instrument.get(INST)
-    k1 = 0.0 if inst.spec.specular == "excluded" else rf.specular(1.5, 1.0)
     rows = []
     for t in (0.5, 1.0):
         for b, rg in (("black", inst.backing_black),
                       (backing_of, np.array([CARD_AT[w] for w in WL]))):
-            r = rf.km_reflectance(np.asarray(mua), np.asarray(mus), 0.8, 1.5, t, rg, k1)
+            r = rf.km_reflectance(np.asarray(mua), np.asarray(mus), 0.8, 1.5, t, rg,
+                                  inst.spec.specular == "excluded")
             rows.append(f"{t},{b}," + ",".join(f"{x:.8f}" for x in r))
     return "thickness_mm,backing," + ",".join(f"r{w}" for w in WL) + "\n" + "\n".join(rows) + "\n"
 

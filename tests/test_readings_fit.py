@@ -43,6 +43,14 @@ GOOD = ("thickness_mm,backing,L,a,b\n0.5,black,40,-1,2\n0.5,white,70,1,8\n"
     ("thickness_mm,backing,L,a,b\n0.5,black,50,0,0\n0.5,white,40,0,0\n",
      "line 3: column L = 40 over white is darker"),
     ("thickness_mm,backing,L,a,b,foo\n0.5,black,50,0,0,1\n", "unknown column 'foo'"),
+    ("thickness_mm,backing,r500,L\n0.5,black,0.3,140\n", "missing column(s) a, b"),
+    ("thickness_mm,backing,L,a,b,illuminant\n0.5,black,40,0,0,D99\n",
+     "r.csv: illuminant = 'D99': allowed"),
+    ("thickness_mm,backing,L,a,b,observer\n0.5,black,40,0,0,7\n", "r.csv: observer = '7'"),
+    ("thickness_mm,backing,L,a,b,L\n0.5,black,40,0,0,90\n", "line 1: column 'L' appears twice"),
+    ("thickness_mm,backing,L,a,b,sd_L\n0.5,black,50,0,0,1\n", "column sd_L without sd_a, sd_b"),
+    ("thickness_mm,backing,r500,r510,sd_r510\n0.5,black,0.3,0.3,0.01\n",
+     "column sd_r510 without sd_r500: give the spread of every column"),
 ])
 def test_bad_readings_exit_2_and_write_nothing(tmp_path, capsys, text, needle):
     f = tmp_path / "r.csv"
@@ -62,11 +70,11 @@ def test_km_recovers_its_own_readings_and_reports_identifiability(tmp_path, caps
     wl = [450, 550, 650]
     rows = []
     inst = instrument.get(INST)
-    k1 = 0.0 if inst.spec.specular == "excluded" else rf.specular(1.5, 1.0)
+    sce = inst.spec.specular == "excluded"
     for t in (0.5, 1.0):
         for b in ("black", "white"):
             rb = getattr(inst, f"backing_{b}")
-            r = rf.km_reflectance(mua, mus, 0.8, 1.5, t, rb, k1)
+            r = rf.km_reflectance(mua, mus, 0.8, 1.5, t, rb, sce)
             rows.append(f"{t},{b}," + ",".join(f"{x:.8f}" for x in r))
     f = tmp_path / "km.csv"
     f.write_text("thickness_mm,backing," + ",".join(f"r{w}" for w in wl) + "\n"
@@ -94,6 +102,23 @@ def test_km_recovers_its_own_readings_and_reports_identifiability(tmp_path, caps
     assert code == 0, err
     assert json.loads(stdout)["identifiable"] is False
     assert "cannot pin both" in err
+
+
+@pytest.mark.parametrize("diffuse_only", [False, True])
+def test_km_reflectance_is_the_km_model_of_a_disc_in_air(diffuse_only):
+    """The readings' Kubelka-Munk over a backing of reflectance k2 (the disc's bottom face
+    seen from inside) is the transport fit's Kubelka-Munk of the disc in air: the entering
+    light loses k1 at the face whether or not the instrument sees the specular (SCE, 45/0
+    and contact probes: the old form dropped 1 - k1 there and read 4 % too bright)."""
+    from dentalux.inverse.models import Sample
+    from dentalux.inverse.models.boundary import moments
+    from dentalux.inverse.models.km import KubelkaMunk
+
+    mua, mus, t = np.array([0.02, 0.1, 0.5]), np.array([3.0, 10.0, 20.0]), 0.7
+    _, tr = KubelkaMunk().forward(mua, mus, Sample(g=0.8, n=1.5, thickness=t,
+                                                   diffuse_only=diffuse_only))
+    r = rf.km_reflectance(mua, mus, 0.8, 1.5, t, moments(1.5, 1.0)[0], diffuse_only)
+    assert np.allclose(r, tr, rtol=1e-12, atol=0), (r, tr)
 
 
 def _layered(mat, thickness, bands=BANDS, seed=12):
@@ -153,7 +178,7 @@ def test_round_trip_shade_readings_fit_predicts_another_thickness(tmp_path, caps
                                 getattr(truth, f"lab_{b}"))) for b in ("black", "white"))
     # Kubelka-Munk's own prediction (no instrument): its model at 1.5 mm
     own = max(float(delta_e00(prob.lab(rf.km_reflectance(
-        km.mua, km.mus, 0.8, 1.5, 1.5, prob.rg(b), prob.k1)), getattr(truth, f"lab_{b}")))
+        km.mua, km.mus, 0.8, 1.5, 1.5, prob.rg(b), prob.diffuse_only)), getattr(truth, f"lab_{b}")))
         for b in ("black", "white"))
     print(f"1.5 mm: mc fit {de:.3f} ΔE00 (allowed {tol:.3f}); KM fit: its own model "
           f"{own:.2f}, its coefficients read through the instrument {de_km:.2f} ΔE00")
@@ -197,8 +222,7 @@ def test_round_trip_cielab_only(tmp_path, capsys):
 
 def test_monte_carlo_solver_and_its_refusals(tmp_path, capsys):
     """--solver monte-carlo keeps the Monte Carlo fit (its noise reported); auto picks the
-    solver by the beam; --solver layered through a d/8 instrument, and --solver without
-    --readings, are refused."""
+    solver by the beam; --solver without --readings, and an unknown solver, are refused."""
     f = tmp_path / "r.csv"
     f.write_text(_km_rows([0.3, 0.1, 0.05], [12.0, 10.0, 9.0],
                           [(0.5, "black"), (0.5, "white")]))
@@ -225,11 +249,10 @@ def test_monte_carlo_solver_and_its_refusals(tmp_path, capsys):
 
 def _km_rows(mua, mus, conditions, wl=(450, 550, 650)):
     inst = instrument.get(INST)
-    k1 = 0.0 if inst.spec.specular == "excluded" else rf.specular(1.5, 1.0)
     rows = []
     for t, b in conditions:
         r = rf.km_reflectance(np.asarray(mua), np.asarray(mus), 0.8, 1.5, t,
-                              getattr(inst, f"backing_{b}"), k1)
+                              getattr(inst, f"backing_{b}"), inst.spec.specular == "excluded")
         rows.append(f"{t},{b}," + ",".join(f"{x:.8f}" for x in r))
     return "thickness_mm,backing," + ",".join(f"r{w}" for w in wl) + "\n" + "\n".join(rows) + "\n"
 
@@ -307,3 +330,27 @@ def _noise_de(data, sd):
     prob = rf.Problem(data, instrument.get(INST), 0.8, 1.5, "km", 0, 1, data.wavelength_nm)
     return max(float(rf.delta_e00_scale(prob.lab(r.spectrum), rf._lab_spread(
         prob, r.spectrum, np.full(len(r.spectrum), sd)))) for r in data.rows)
+
+
+def test_intervals_widen_with_a_misfit_beyond_the_assumed_spread(tmp_path):
+    """Kubelka-Munk readings with noise 0.01 per band and no sd columns (the fit assumes
+    0.003): the coefficients' standard deviations are widened by the residuals' chi-square per
+    degree of freedom, so the fit's error from the truth is about one of them (the median
+    |z| of a normal deviate is 0.67; the unscaled intervals, three times too narrow, gave 2.0
+    on these readings)."""
+    wl = list(range(400, 710, 10))
+    x = (np.asarray(wl) - 550.0) / 100.0
+    mua, mus = 0.1 * np.exp(-0.8 * x), 10.0 * np.exp(-0.3 * x)
+    rng = np.random.default_rng(7)
+    lines = _km_rows(mua, mus, [(t, b) for t in (0.3, 0.6, 1.0) for b in ("black", "white")],
+                     wl).splitlines()
+    noisy = [lines[0]] + [",".join(c if i < 2 else f"{float(c) + rng.normal(0, 0.01):.6f}"
+                                   for i, c in enumerate(ln.split(","))) for ln in lines[1:]]
+    f = tmp_path / "noisy.csv"
+    f.write_text("\n".join(noisy) + "\n")
+    res = rf.fit(readings.load(f), INST, g=0.8, n=1.5, model="km")
+    z = np.concatenate([np.log(fit / true) / (np.log(ci[:, 1] / fit) / 1.96)
+                        for fit, ci, true in ((res.mua, res.mua_ci, mua),
+                                              (res.mus, res.mus_ci, mus))])
+    print(f"median |z| {np.median(np.abs(z)):.2f} over {z.size} coefficients")
+    assert 0.4 < np.median(np.abs(z)) < 1.2

@@ -10,7 +10,7 @@ all of them (docs/limits.md):
 - **structure**: tables and arrays nest at most :data:`MAX_DEPTH` deep (a parser's own
   recursion is never the error a user sees); an array holds at most :data:`MAX_ITEMS`
   values; a CSV field is at most :data:`MAX_CSV_FIELD` characters and every row has as many
-  fields as the header;
+  fields as the header, and a header names each column once;
 - **values** (:func:`number`, :func:`integer`, :func:`text`, :func:`wavelengths`): strict
   types (no ``true`` for a number, no ``"4.0"`` for a number, no 3.5 for an integer), finite,
   inside a stated range; wavelength arrays strictly increasing (sorted, no duplicates) inside
@@ -191,6 +191,7 @@ def parse_csv(lines: list[tuple[int, str]], where: str) -> tuple[list[str], list
                 if not fields or not any(f.strip() for f in fields):
                     continue
                 header = [f.strip() for f in fields]
+                _check_unique(header, where, lineno)
                 continue
             if not fields:
                 continue
@@ -206,6 +207,16 @@ def parse_csv(lines: list[tuple[int, str]], where: str) -> tuple[list[str], list
     if header is None:
         raise ValueError(f"{where}: empty (no header line)")
     return header, rows
+
+
+def _check_unique(header: list[str], where: str, lineno: int) -> None:
+    """A column named twice would be read from one of its copies, the other ignored."""
+    seen = set()
+    for name in header:
+        if name and name in seen:
+            raise ValueError(f"{where}: line {lineno}: column {name!r} appears twice in the "
+                             "header: each column once")
+        seen.add(name)
 
 
 # --- values -------------------------------------------------------------------------------

@@ -10,7 +10,7 @@ One row per reading (docs/fitting.md):
   ``observer`` columns say otherwise) or spectral reflectance columns ``r400 ... r700``:
   any subset of 360-780 nm on the 10 nm grid, reflectance as a fraction in [0, 1];
 - optional ``sd_L, sd_a, sd_b`` or ``sd_r400 ...``: each reading's spread (one standard
-  deviation, same units).
+  deviation, same units), for every column of its form or none.
 
 When both forms are present the spectra are fitted and ``L,a,b`` are only checked for
 range. Lines starting with ``#`` are comments (``shade --readings-out`` writes the
@@ -161,6 +161,20 @@ def _check_coverage(rows: list[Reading], bands: list[float], where: str) -> None
                              f"the readings' {bands[0]:g}-{bands[-1]:g} nm")
 
 
+def _check_sd_sets(header: list[str], spectral: list[str], where: str) -> None:
+    """Spreads come for a whole form or not at all: the fit reads sd_L, sd_a, sd_b together
+    and sd_r... for every spectral column, so a partial set would be ignored unseen."""
+    for form in ("Lab", spectral):
+        sds = [f"sd_{c}" for c in form]
+        given = [c for c in sds if c in header]
+        if given and len(given) < len(sds):
+            missing = [c for c in sds if c not in header]
+            more = f" and {len(missing) - 3} more" if len(missing) > 3 else ""
+            raise ValueError(f"{where}: column {given[0]} without {', '.join(missing[:3])}"
+                             f"{more}: give the spread of every column of its form "
+                             f"({sds[0]} ... {sds[-1]}) or of none")
+
+
 def _uniform(rows, col: str, where: str, default: str) -> str:
     values = {str(r.get(col, "")).strip() for r in rows} - {""}
     if len(values) > 1:
@@ -179,7 +193,7 @@ def load(path, illuminant: str | None = None, observer: str | None = None) -> Re
     missing = [c for c in ("thickness_mm", "backing") if c not in header]
     spectral = [c for c in header if _SPECTRAL.match(c)]
     has_lab = all(c in header for c in "Lab")
-    if not spectral and not has_lab:
+    if not (spectral or has_lab) or any(c in header for c in "Lab"):  # L, a, b go together
         missing += [c for c in "Lab" if c not in header]
     if missing:
         raise ValueError(f"{where}: missing column(s) {', '.join(missing)}: a readings file "
@@ -194,6 +208,7 @@ def load(path, illuminant: str | None = None, observer: str | None = None) -> Re
     for c in header:
         if c.startswith("sd_") and c[3:] not in header:
             raise ValueError(f"{where}: column {c!r} has no column {c[3:]!r} to qualify")
+    _check_sd_sets(header, spectral, where)
     known = {"thickness_mm", "backing", *"Lab", *spectral, *OPTIONAL,
              *(f"sd_{c}" for c in (*"Lab", *spectral))}
     unknown = [c for c in header if c not in known]
@@ -222,6 +237,12 @@ def load(path, illuminant: str | None = None, observer: str | None = None) -> Re
     _check_coverage(out, wl or list(LAB_COVERAGE_NM), where)
     ill = illuminant or _uniform(rows, "illuminant", where, "D65")
     obs = observer or _uniform(rows, "observer", where, "2")
+    from dentalux.color import system
+
+    try:  # checked here, where the error can name the file
+        system(ill, str(obs))
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from None
     return Readings(path=str(p), rows=out, form="spectral" if spectral else "lab",
                     wavelength_nm=wl, illuminant=ill, observer=str(obs),
                     sha256=hashlib.sha256(p.read_bytes()).hexdigest())

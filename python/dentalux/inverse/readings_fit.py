@@ -15,8 +15,9 @@ Two forward models of the same readings (:mod:`dentalux.readings`,
 - ``km``: Kubelka–Munk with the Saunderson correction, the field's baseline. A disc of
   thickness X on a backing of reflectance R_g has, with a = 1 + K/S, b = sqrt(a² − 1),
   R = (1 − R_g (a − b coth bSX)) / (a − R_g + b coth bSX) inside its faces; the faces add
-  R_m = k1 + (1 − k1)(1 − k2) R / (1 − k2 R) (k1 the normal Fresnel reflectance, counted
-  only where the geometry includes the specular reflection; k2 the diffuse internal
+  R_m = k1 + (1 − k1)(1 − k2) R / (1 − k2 R) (k1 the normal Fresnel reflectance: its own
+  term only where the geometry includes the specular reflection, the entering light's
+  1 − k1 always; k2 the diffuse internal
   reflectance, :func:`dentalux.inverse.models.boundary.moments`). The backing's R_g is the
   instrument's, used as it is. K and S map to the transport coefficients as in
   :mod:`dentalux.inverse.models.km`: K = 2 μa, S = (3/4) μs (1 − g). Kubelka–Munk knows no
@@ -41,9 +42,10 @@ every step needed about 20 readings per thickness and stalled at 1–3 ΔE00; wi
 solver one verification is usually enough).
 
 The uncertainty of each parameter comes from the Jacobian with the readings' sd (or
-:data:`DEFAULT_SD`) and the Monte Carlo standard error; a parameter whose standard deviation
-in log exceeds :data:`PINNED_SD` is not pinned by the readings, and one thickness over one
-backing never pins both coefficients (``identifiable`` false).
+:data:`DEFAULT_SD`) and the Monte Carlo standard error, widened by the residuals' chi-square
+per degree of freedom where that exceeds 1 (:func:`_misfit_scale`); a parameter whose
+standard deviation in log exceeds :data:`PINNED_SD` is not pinned by the readings, and one
+thickness over one backing never pins both coefficients (``identifiable`` false).
 """
 
 from __future__ import annotations
@@ -57,7 +59,6 @@ import numpy as np
 
 from dentalux.color import delta_e00, delta_e00_scale
 from dentalux.inverse import readings_smooth
-from dentalux.inverse.models.boundary import specular  # noqa: F401 (tests, callers)
 from dentalux.inverse.readings_model import (
     TABLE_PHOTON_FRACTION,
     Problem,
@@ -354,6 +355,20 @@ def _fit_table(prob: Problem, wrap, theta, lo, hi, form, iterations):
     return (*best[:5], lo, hi, (span_a, span_s))
 
 
+def _misfit_scale(r, theta, pen) -> np.ndarray:
+    """Each block's covariance factor: the residuals' chi-square per degree of freedom where
+    the readings scatter about the fit more than their stated (or assumed) spread, so that
+    the intervals widen with the misfit; never below 1 (a close fit does not shrink the
+    readings' sd), 1 where no degree of freedom is left. With the smoothness penalty the
+    bands are one block, the penalty's rows counted as observations."""
+    if pen is None:
+        chi2, dof = np.sum(r * r, axis=1), r.shape[1] - theta.shape[1]
+    else:
+        chi2 = np.full(r.shape[0], np.sum(r * r) + np.sum((pen @ theta.ravel()) ** 2))
+        dof = r.size + pen.shape[0] - theta.size
+    return np.maximum(chi2 / dof, 1.0) if dof > 0 else np.ones(r.shape[0])
+
+
 def _edge_note(theta, lo, hi, bands, span_a) -> str:
     """A warning for bands whose fit sits at the table's edge (empty where none does)."""
     low_mua, edge = [], []
@@ -432,9 +447,11 @@ def fit(readings: Readings, instrument, g: float | None = None, n: float | None 
         evaluations = prob.mc_calls
         edge_note = _edge_note(theta, lo, hi, bands, spans[0]) if form == "spectral" else ""
     # uncertainty of each parameter: (J^T J)^-1 with residuals in units of their sigma (with
-    # smoothing, the penalised problem's); singular: the readings alone do not pin a band
+    # smoothing, the penalised problem's), widened by the misfit; singular: the readings
+    # alone do not pin a band
     jtj = np.einsum("bmi,bmj->bij", jac, jac)
     cov = (np.linalg.pinv(jtj) if pen is None else readings_smooth.block_covariance(jac, pen))
+    cov = cov * _misfit_scale(r, theta, pen)[:, None, None]
     sd = np.sqrt(np.clip(np.diagonal(cov, axis1=1, axis2=2), 0, None))
     singular = np.linalg.cond(jtj) > 1e12
     sd = np.where(singular[:, None], np.inf, sd)
@@ -566,7 +583,8 @@ def material_doc(res: ReadingsFit, readings: Readings, inst, name: str,
              f"{'yes' if res.identifiable else 'NO'} ({res.identifiability}). mua_ci and "
              "mus_ci are 95 % intervals from the readings' sd (or the default "
              f"{DEFAULT_SD[readings.form]}) and the model's error (its noise and, with the "
-             "layered solver, its stated accuracy)."
+             "layered solver, its stated accuracy), widened by the residuals' chi-square "
+             "per degree of freedom where it exceeds 1."
              + (f" Smoothed across the bands (weight {res.smooth:g}): the intervals include "
                 "that assumption." if res.smooth else ""))
     return {"materials": {name: {

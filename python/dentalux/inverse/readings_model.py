@@ -31,9 +31,11 @@ TABLE_PHOTON_FRACTION = 0.5
 SLOTS = ("black", "white")
 
 
-def km_reflectance(mua, mus, g: float, n: float, thickness, rg, k1: float):
+def km_reflectance(mua, mus, g: float, n: float, thickness, rg, diffuse_only: bool):
     """Kubelka–Munk + Saunderson reflectance of a disc on a backing (readings_fit's module
-    doc); arrays broadcast."""
+    doc); ``diffuse_only``: the instrument excludes the specular reflection k1, though the
+    light still enters through the face (1 - k1), as in :mod:`dentalux.inverse.models.km`;
+    arrays broadcast."""
     k = 2.0 * np.asarray(mua, dtype=float)
     s = np.maximum(0.75 * np.asarray(mus, dtype=float) * (1.0 - g), 1e-12)
     a = 1.0 + k / s
@@ -43,8 +45,8 @@ def km_reflectance(mua, mus, g: float, n: float, thickness, rg, k1: float):
     bcoth = np.where(b * s * thickness < 1e-8, 1.0 / (s * thickness),
                      b / np.tanh(np.minimum(bsx, 300.0)))
     r = (1.0 - rg * (a - bcoth)) / (a - rg + bcoth)
-    k2 = moments(n, 1.0)[0]
-    return k1 + (1.0 - k1) * (1.0 - k2) * r / (1.0 - k2 * r)
+    k1, k2 = specular(n, 1.0), moments(n, 1.0)[0]
+    return (0.0 if diffuse_only else k1) + (1.0 - k1) * (1.0 - k2) * r / (1.0 - k2 * r)
 
 
 class Problem:
@@ -57,7 +59,7 @@ class Problem:
         self.bands = np.asarray(bands, dtype=float)
         self.cs = system(readings.illuminant, str(readings.observer))
         self.rec = Reconstruction(self.bands, grid=self.cs.wavelengths, basis="hold")
-        self.k1 = 0.0 if inst.spec.specular == "excluded" else specular(n, 1.0)
+        self.diffuse_only = inst.spec.specular == "excluded"
         # 'auto' reads a d/8 instrument by the walks; 'layered' reads its 8 deg beam as normal
         self.layered = model == "mc" and engine.use_layered(inst, solver)
         self.accuracy = ACCURACY if self.layered else 0.0
@@ -135,7 +137,7 @@ class Problem:
         self.evaluations += 1
         if self.model == "km":
             out = np.array([km_reflectance(mua, mus, self.g, self.n, row.thickness_mm,
-                                           rg, self.k1)
+                                           rg, self.diffuse_only)
                             for row, rg in zip(self.r.rows, self.slot_rg, strict=True)])
             return out, np.zeros_like(out)
         if self.model == "table":
