@@ -86,11 +86,26 @@ def compare(fitted, truth, t: float, solver: str) -> tuple[float, float, float]:
     return de[0], de[1], se
 
 
+def km_own(data, fitted, truth, g: float, n: float, t: float) -> list[float]:
+    """ΔE00 over black / white of Kubelka-Munk's own prediction at ``t`` (its model over the
+    instrument's backings) against the truth's Monte Carlo reading (40 000 photons, seed 11)."""
+    from dentalux import instrument
+
+    prob = rf.Problem(data, instrument.get(INST), g, n, "km", 0, 1, BANDS)
+    b = dental.read([(truth, t)], instrument=INST, bands=BANDS, photons=40_000, seed=11,
+                    solver="monte-carlo")
+    mua, mus = (np.array([getattr(fitted.at(w), c) for w in BANDS], float) for c in ("mua", "mus"))
+    return [round(float(delta_e00(prob.lab(rf.km_reflectance(
+        mua, mus, g, n, t, prob.rg(k), prob.diffuse_only)),
+        getattr(b, f"lab_{k}"))), 2) for k in ("black", "white")]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--solver", default="auto", help="monte-carlo | layered | auto | old")
     ap.add_argument("--cache", default="/tmp/fit-readings-bench")
     ap.add_argument("--cases", default="composite:spectral,composite:lab,dentin:lab")
+    ap.add_argument("--model", default="mc", help="mc | km")
     args = ap.parse_args()
     cache = Path(args.cache)
     cache.mkdir(parents=True, exist_ok=True)
@@ -105,9 +120,9 @@ def main() -> None:
         g = float(np.mean(truth.g))
         n = float(np.mean(truth.n))
         t0, c0 = time.perf_counter(), time.process_time()
-        res = rf.fit(data, INST, g=g, n=n, **kw)
+        res = rf.fit(data, INST, g=g, n=n, model=args.model, **kw)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-        out = cache / f"{name}-{form}-{args.solver}.toml"
+        out = cache / f"{name}-{form}-{args.solver}-{args.model}.toml"
         import tomli_w
 
         out.write_bytes(tomli_w.dumps(rf.material_doc(
@@ -118,6 +133,11 @@ def main() -> None:
                "model_calls": res.evaluations,
                "residuals": [round(r["delta_e00"], 2) for r in res.residuals],
                "model_se": round(res.mc_stderr_de00, 3)}
+        if args.model == "km":
+            for t in (1.5, 2.0):
+                row[f"{t}mm_km_own"] = km_own(data, fitted, truth, g, n, t)
+            print(json.dumps(row), flush=True)
+            continue
         for t in (1.5, 2.0):
             for how in ("monte-carlo", "layered"):
                 b, w, se = compare(fitted, truth, t, how)
