@@ -459,6 +459,11 @@ def test_a_stack_target_takes_a_material_file_path(tmp_path):
     assert parse_stack("enamel:1.0/dentin:2.5") == [("enamel", 1.0), ("dentin", 2.5)]
     with pytest.raises(ValueError, match="MATERIAL:MM"):
         parse_stack("enamel:x")
+    # a layer whose thickness is not a number is that layer's error, not a file 'enamel:x/dentin'
+    for text, layer in (("enamel:x/dentin:3", "enamel:x"), ("enamel:1,0/dentin:3", "enamel:1,0"),
+                        ("enamel:1/dentin:y/enamel:0.5", "dentin:y")):
+        with pytest.raises(ValueError, match=f"layer .* = '{layer}': expected MATERIAL:MM"):
+            parse_stack(text)
 
 
 @FAST
