@@ -184,6 +184,13 @@ def test_material_file_refuses_malformed_values_naming_file_and_key(tmp_path, ca
     assert code == 2 and out == "" and err == f"error: {msg}\n", err
 
 
+def test_a_material_value_out_of_range_is_printed_as_a_plain_number(tmp_path, capsys):
+    path = tmp_path / "my-composite.toml"
+    path.write_text(tomli_w.dumps({"materials": {"comp": _material(g=[1.8, 0.6, 0.6])}}))
+    code, _, err = run(capsys, ["materials", "show", path])
+    assert code == 2 and "g[0] = 1.8 at 400 nm" in err and "np." not in err, err
+
+
 def test_material_file_deep_or_foreign_encoding_is_a_named_error(tmp_path, capsys):
     good = tmp_path / "good.toml"
     good.write_text(tomli_w.dumps({"materials": {"comp": _material()}}))
@@ -452,6 +459,11 @@ def test_a_stack_target_takes_a_material_file_path(tmp_path):
     assert parse_stack("enamel:1.0/dentin:2.5") == [("enamel", 1.0), ("dentin", 2.5)]
     with pytest.raises(ValueError, match="MATERIAL:MM"):
         parse_stack("enamel:x")
+    # a layer whose thickness is not a number is that layer's error, not a file 'enamel:x/dentin'
+    for text, layer in (("enamel:x/dentin:3", "enamel:x"), ("enamel:1,0/dentin:3", "enamel:1,0"),
+                        ("enamel:1/dentin:y/enamel:0.5", "dentin:y")):
+        with pytest.raises(ValueError, match=f"layer .* = '{layer}': expected MATERIAL:MM"):
+            parse_stack(text)
 
 
 @FAST

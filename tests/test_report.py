@@ -238,6 +238,15 @@ def test_bad_arguments_are_refused_before_any_work(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize("thickness", ["-1", "0", "nan"])
+def test_a_bad_thickness_is_refused_naming_thickness(tmp_path, thickness):
+    rc, _, err = _main(["report", "enamel", "--thickness", thickness, "--bands", "paper",
+                        "--photons", "200", "--out", str(tmp_path / "r.html")])
+    assert rc == 2 and "thickness = " in err and "> 0" in err, err
+    assert "tp-thicknesses" not in err and "Traceback" not in err, err
+    assert not list(tmp_path.iterdir())
+
+
 def _chromium() -> str | None:
     for name in (os.environ.get("DENTALUX_CHROMIUM"), "chromium", "chromium-browser",
                  "google-chrome"):

@@ -319,7 +319,8 @@ def _validate(m: Material) -> None:
         if np.any(bad):
             i = int(np.argmax(bad))
             raise ValueError(
-                f"{where}: {q}[{i}] = {v[i]!r} at {lam[i]:g} nm is out of range: allowed {allowed}"
+                f"{where}: {q}[{i}] = {float(v[i])!r} at {lam[i]:g} nm is out of range: "
+                f"allowed {allowed}"
             )
     for q, v in m.ci.items():
         if q not in QUANTITIES:

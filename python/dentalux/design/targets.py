@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 L_RANGE = (0.0, 100.0)
 AB_RANGE = (-128.0, 127.0)  # the 8-bit CIELAB encoding's range, wider than any object colour
@@ -101,6 +102,14 @@ def parse_stack(text: str) -> list[tuple[str, float]]:
         parts.append(buf)
     for i, part in enumerate(p for p in parts if p.strip()):
         material, sep, mm = part.strip().rpartition(":")
+        # 'enamel:x/dentin:3' joined its first layer to a path: not a file, so that layer
+        # (its text after ':' no number) is the error
+        if "/" in material and not Path(material).is_file():
+            bad = next((q for q in material.split("/") if q.rpartition(":")[2].strip()
+                        and ":" in q), None)
+            if bad is not None:
+                raise ValueError(f"target stack layer {i} = {bad!r}: expected MATERIAL:MM "
+                                 "with a thickness > 0 [mm]")
         try:
             t = float(mm)
         except ValueError:

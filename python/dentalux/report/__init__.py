@@ -196,6 +196,8 @@ def _provenance(mat) -> dict:
 
 
 def _tp_thicknesses(thickness: float, given) -> list[float]:
+    if not (math.isfinite(thickness) and thickness > 0):
+        raise ValueError(f"thickness = {thickness!r}: must be a finite number > 0 [mm]")
     ts = [thickness * f for f in TP_FACTORS] if given is None else [float(t) for t in given]
     if not ts or not all(math.isfinite(t) and t > 0 for t in ts):
         raise ValueError(f"--tp-thicknesses = {given!r}: need thicknesses > 0 [mm]")
