@@ -148,20 +148,21 @@ def test_auto_falls_back_and_layered_is_refused_where_it_does_not_hold():
     from types import SimpleNamespace
 
     d8 = instrument.get("d8-benchtop-sav")
-    assert engine.layered_refusal(d8) and engine.layered_refusal(instrument.get(None)) is None
-    assert engine.layered_refusal(d8, tilt_ok=True) is None
-    assert _read("auto", 2_000, inst="d8-benchtop-sav").method == "backing-orders"
+    assert engine.layered_refusal(d8) is None
+    assert engine.layered_refusal(instrument.get(None)) is None
+    assert _read("auto", 2_000, inst="d8-benchtop-sav").method == "layered"
     assert _read("auto", 2_000).method == "layered"
-    # a beam tilted past MAX_TILT_DEG (no preset has one) is refused even on request
-    steep = SimpleNamespace(name="steep", geometry="45-x", is_infinite=False,
+    # a beam tilted past MAX_TILT_DEG (no preset has one) is refused, and 'auto' walks it
+    steep = SimpleNamespace(name="steep", geometry="45-x", is_infinite=False, fibres=None,
                             spec=SimpleNamespace(incidence="angle:45"))
-    assert "beam along the normal" in engine.layered_refusal(steep, tilt_ok=True)
+    assert "beam along the normal" in engine.layered_refusal(steep)
+    assert not engine.use_layered(steep, "auto")
     with pytest.raises(ValueError, match="solver"):
         _read("exact", 2_000)
 
 
 def test_a_d8_instrument_read_by_the_solver_agrees_with_its_walks():
-    # solver='layered' reads d/8 (in its reciprocal form a beam at 8 deg) as a beam along the
+    # the solver reads d/8 (in its reciprocal form a beam at 8 deg) as a beam along the
     # normal: against walks with the beam at 8 deg within 4 s.e. plus the solver's accuracy
     # (the tilt itself moves a reading by 0.2-0.3 % at most; the 2026-12-07 note)
     solved = _read("layered", 20_000, inst="d8-benchtop-sav")

@@ -234,10 +234,10 @@ def test_monte_carlo_solver_and_its_refusals(tmp_path, capsys):
     smooth = rf.fit(data, INST, g=0.8, n=1.5, photons=2000, solver="monte-carlo", smooth=1e4)
     assert smooth.smooth == 1e4 and all(math.isfinite(r["delta_e00"]) for r in smooth.residuals)
     assert np.all(smooth.mua_ci[:, 0] <= smooth.mua) and np.all(smooth.mua <= smooth.mua_ci[:, 1])
-    # auto: the layered solver for a normal beam (the laterally infinite disc too), the walks
-    # for d/8
+    # auto: the layered solver for a normal beam (the laterally infinite disc too) and for
+    # d/8's 8 deg beam (engine.MAX_TILT_DEG)
     assert rf.fit(data, "infinite", g=0.8, n=1.5, photons=2000).solver == "layered"
-    assert rf.fit(data, "d8-benchtop-sav", g=0.8, n=1.5, photons=2000).solver == "monte-carlo"
+    assert rf.fit(data, "d8-benchtop-sav", g=0.8, n=1.5, photons=2000).solver == "layered"
     out = tmp_path / "m.toml"
     code, stdout, err = run(capsys, "fit", "--tt", 0.5, "--tr", 0.3, "--n", 1.5, "--g", 0.8,
                             "--thickness", 1.0, "--solver", "auto")

@@ -11,6 +11,7 @@ from typing import Annotated
 import typer
 
 from dentalux import dental, limits
+from dentalux.reading.engine import MAX_TILT_DEG
 from dentalux.spectra import full_bands
 
 DEFAULTS = {name: p.default for name, p in inspect.signature(dental.metrics).parameters.items()}
@@ -32,9 +33,10 @@ Seed = Annotated[int, typer.Option(help="random seed")]
 Solver = Annotated[str, typer.Option(help="monte-carlo (slab walks) | layered (deterministic "
                                           "transport solver; --photons are then the budget "
                                           "of the walk that corrects for the specimen's rim; "
-                                          "a d/8 instrument's 8 deg beam is read as normal) "
-                                          "| auto (layered where the beam is along the "
-                                          "normal)")]
+                                          "a beam within "
+                                          f"{MAX_TILT_DEG:g} deg of the normal, as d/8's, is "
+                                          "read as normal) | auto (layered where the beam is "
+                                          f"within {MAX_TILT_DEG:g} deg of the normal)")]
 Estimator = Annotated[str, typer.Option(help="weighted | analog")]
 Observer = Annotated[str, typer.Option(help="'2' (CIE 1931) or '10' (CIE 1964)")]
 Illuminant = Annotated[str, typer.Option(help="illuminant (colour-science name)")]

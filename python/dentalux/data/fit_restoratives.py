@@ -6,8 +6,8 @@ al. 2009 are in full texts that could not be read; docs/materials.md). What coul
 are translucency readings in abstracts: the translucency parameter (TP, CIELAB ΔE*ab over
 black against white) and the contrast ratio (CR = Y over black / Y over white) of discs of a
 stated thickness. Each restorative here is fitted to such readings **through an instrument
-model** (dentalux.dental.read, Monte Carlo slab with the instrument's window, backings and
-edge loss), so edge loss is part of the fit, not an error of it.
+model** (dentalux.dental.read, with the instrument's window, backings and edge loss), so
+edge loss is part of the fit, not an error of it.
 
 The model of every material is deliberately small, because a TP or a CR pins at most two
 numbers:

@@ -8,8 +8,8 @@ Target strings (``dentalux design --target``):
   holds no published values for it (:func:`dentalux.shade_guides.lab`); or of a guide the
   lab imported (``dentalux guides import``), or ``FILE.csv:TAB`` of a guide file;
 - ``stack:MATERIAL:MM[/MATERIAL:MM...]`` — a tooth region given as a layered specimen (top
-  to bottom, e.g. ``stack:enamel:1.0/dentin:2.5``), read by the Monte Carlo slab through
-  the design's instrument: its colour over the white backing becomes the target.
+  to bottom, e.g. ``stack:enamel:1.0/dentin:2.5``), read through the design's instrument
+  as ``dental.read`` reads it: its colour over the white backing becomes the target.
 
 ``tp`` adds a translucency target (TP00, ΔE00 between the readings over black and white).
 A target carries the instrument that read it (``instrument``, a preset name or file; None: the
@@ -163,7 +163,7 @@ def _parse(target, tp, read) -> Target:
         source = {"kind": "stack", "status": "derived",
                   "stack": [{"material": str(mat), "thickness_mm": t} for mat, t in stack],
                   "tp00_read": m.tp00, "tp00_read_stderr": m.stderr["tp00"],
-                  "notes": "read by the Monte Carlo slab through the target's instrument "
+                  "notes": "read as dental.read reads it through the target's instrument "
                            "(the design's unless --target-instrument names another), "
                            "colour over its white backing; its TP00 is in tp00_read (a TP "
                            "target only when --target-tp is given)"}

@@ -60,7 +60,6 @@ class Problem:
         self.cs = system(readings.illuminant, str(readings.observer))
         self.rec = Reconstruction(self.bands, grid=self.cs.wavelengths, basis="hold")
         self.diffuse_only = inst.spec.specular == "excluded"
-        # 'auto' reads a d/8 instrument by the walks; 'layered' reads its 8 deg beam as normal
         self.layered = model == "mc" and engine.use_layered(inst, solver)
         self.accuracy = ACCURACY if self.layered else 0.0
         self.evaluations = 0

@@ -55,7 +55,8 @@ WALKS = ("per-band", "shared")
 #: specimen's rim takes), or 'auto' (layered where it holds, else monte-carlo)
 SOLVERS = ("monte-carlo", "layered", "auto")
 #: the solver of every reading unless one is named: the layered solver wherever the beam is
-#: along the normal (its only noise is the rim's walk), the walks elsewhere
+#: along the normal or within MAX_TILT_DEG of it (its only noise is the rim's walk), the
+#: walks elsewhere
 DEFAULT_SOLVER = "auto"
 # bands solved together by the layered solver, one chunk per thread (a design's kept
 # operators take up to about 50 MB per band of a chunk)
@@ -130,27 +131,25 @@ def _polynomial(sums: np.ndarray, key: str, rb: np.ndarray) -> np.ndarray:
     return np.einsum("brk,bk->rb", sums[..., WINDOW_KEYS.index(key)], powers)
 
 
-#: the largest tilt of an instrument's beam that the layered solver reads, on request
-#: (solver='layered'; 'auto' keeps the walks), as a beam along the normal: the d/8
-#: geometry's 8°, whose tilt moves a reading by 0.2-0.3 % at most (walks of 1.6 M photons
-#: against the 0-d geometry; docs/notes/2026-12-07-default-and-speed.md), within the
-#: solver's stated accuracy (layered.stack.ACCURACY)
+#: the largest tilt of an instrument's beam that the layered solver reads as a beam along
+#: the normal: the d/8 geometry's 8°, whose tilt moves a reading by 0.2-0.3 % at most (walks
+#: of 1.6 M photons against the 0-d geometry; docs/notes/2026-12-07-default-and-speed.md),
+#: within the solver's stated accuracy (layered.stack.ACCURACY); the rim walk keeps the tilt
 MAX_TILT_DEG = 8.0
 
 
-def layered_refusal(inst, tilt_ok: bool = False) -> str | None:
+def layered_refusal(inst) -> str | None:
     """Why the layered solver cannot read through ``inst``, or None where it can: it needs a
     beam along the normal (the detector cone, lit region and window are then symmetric
-    about it), or, with ``tilt_ok``, one within MAX_TILT_DEG of it."""
+    about it) or within MAX_TILT_DEG of it, read as along it."""
     if inst.is_infinite or inst.spec.incidence == "normal":
         return None
     kind, deg = parse_incidence(inst.spec.incidence)
-    if tilt_ok and kind == "angle" and deg <= MAX_TILT_DEG:
+    if kind == "angle" and deg <= MAX_TILT_DEG:
         return None
     return (f"solver = 'layered': instrument {inst.name!r} ({inst.geometry}) lights at "
             f"{inst.spec.incidence!r}; the layered solver needs a beam along the normal "
-            f"(solver = 'layered' reads one within {MAX_TILT_DEG:g} deg of it as normal). "
-            "Use solver = 'monte-carlo' (or 'auto')")
+            f"or within {MAX_TILT_DEG:g} deg of it. Use solver = 'monte-carlo' (or 'auto')")
 
 
 def _survival(rb_black, rb_white) -> float:
@@ -299,7 +298,7 @@ def solved(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
     """The instrument's readings from the layered solver (:mod:`dentalux.reading.layered`),
     exact for a laterally infinite specimen, with a Monte Carlo walk of ``photons`` per band
     for what a finite specimen's rim takes (past-rim tallies, the only noise)."""
-    why = layered_refusal(inst, tilt_ok=True)
+    why = layered_refusal(inst)
     if why:
         raise ValueError(why)
     wl_count = len(band_stacks)
@@ -530,7 +529,7 @@ def use_layered(inst, solver: str) -> bool:
         return False
     if solver == "auto":
         return layered_refusal(inst) is None
-    why = layered_refusal(inst, tilt_ok=True)
+    why = layered_refusal(inst)
     if why:
         raise ValueError(why)
     return True
