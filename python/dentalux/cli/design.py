@@ -114,9 +114,11 @@ def design_command(
         console.print(f"plot: {plot}")
     if rendered is not None:
         r, p = rendered["rendered"], rendered["predicted"]
-        console.print(f"ΔE00 crown vs natural incisor, design 1: rendered {r['delta_e00']:.2f} ± "
-                      f"{r['delta_e00_stderr']:.2f}, predicted {p['delta_e00']:.2f} ± "
-                      f"{p['delta_e00_stderr']:.2f} (rendered L*a*b* crown "
+        # the two ΔE00 answer different questions: the render's is crown against the rendered
+        # natural incisor, the slab's is the design against its target
+        console.print(f"design 1: rendered ΔE00 crown vs natural incisor {r['delta_e00']:.2f} ± "
+                      f"{r['delta_e00_stderr']:.2f}; slab ΔE00 design vs target "
+                      f"{p['delta_e00']:.2f} ± {p['delta_e00_stderr']:.2f} (rendered L*a*b* crown "
                       + " ".join(f"{x:.1f}" for x in r["lab"]["crown"]) + ", natural "
                       + " ".join(f"{x:.1f}" for x in r["lab"]["natural"])
                       + f"; {rendered['seconds']:.0f} s)")
