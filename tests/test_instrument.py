@@ -168,6 +168,10 @@ def test_shade_contract_instrument_keys_and_infinite_as_before(capsys):
     got.pop("cpu_seconds"), before.pop("cpu_seconds")  # the cost is the run's own
     assert got == before  # exactly the infinite-geometry numbers
     assert got["instrument"]["name"] == "infinite" and got["edge_loss"]["white"] == 0.0
+    with pytest.raises(SystemExit):  # the table names the unbounded areas, not None
+        main(["shade", *common, "--instrument", "infinite"])
+    table = capsys.readouterr().out
+    assert "lit unbounded" in table and "None" not in table, table
     code, out, _ = _shade_json(capsys, [*common, "--viewed-diameter", "2.5"])
     got = json.loads(out)
     ins = got["instrument"]

@@ -92,8 +92,11 @@ def shade_command(
     m = out
     se = m["stderr"]
     ins = m["instrument"]
-    where = (f"{ins['name']}: {ins['geometry']}, lit {ins['illuminated_diameter_mm']} mm, "
-             f"viewed {ins['viewed_diameter_mm']} mm, specular {ins['specular']}")
+    def mm(d):  # the infinite disc's areas are unbounded (None in the JSON)
+        return "unbounded" if d is None else f"{d} mm"
+
+    where = (f"{ins['name']}: {ins['geometry']}, lit {mm(ins['illuminated_diameter_mm'])}, "
+             f"viewed {mm(ins['viewed_diameter_mm'])}, specular {ins['specular']}")
     title = (" / ".join(f"{n} {t:g} mm" for n, t in specimen) if specimen
              else f"{material}, {thickness:g} mm")
     table = Table(title=f"{title}, {illuminant}, {observer} deg, read by {where}")
