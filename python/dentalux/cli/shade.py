@@ -122,10 +122,13 @@ def shade_command(
         table.add_row(f"{match} {row['tab']}", f"ΔE00 {row['delta_e00']:.2f}")
     if m.get("shade_match_instrument", {}).get("note"):
         table.add_row("  guide instrument", m["shade_match_instrument"]["note"])
+    # the JSON's photons are the run's total; the table says it per band too
+    per_band = (f"{m['photons'] // max(len(m['wavelength_nm']), 1)} photons per band "
+                f"({m['photons']} in all)")
     if m["method"] != "layered":
-        how = f"{m['photons']} photons"
+        how = per_band
     elif m["photons"]:
-        how = f"layered solver and a rim walk of {m['photons']} photons' budget"
+        how = f"layered solver, its rim walk's budget {per_band}"
     else:
         how = "layered solver alone (no rim, no Monte Carlo)"
     photons_line = f"{how}, {m['cpu_seconds']:.1f} CPU-s"
