@@ -52,7 +52,12 @@ const TARGET_BATCHES: u64 = 64;
 /// Photons per batch for a run of `n_photons`: a function of `n_photons` only, never of
 /// the thread count, so a seed gives the same numbers on any machine.
 pub fn batch_size(n_photons: u64) -> u64 {
-    (n_photons / TARGET_BATCHES).clamp(MIN_BATCH, BATCH)
+    batch_size_from(n_photons, MIN_BATCH)
+}
+
+/// [`batch_size`] with the smallest batch `min_batch`.
+fn batch_size_from(n_photons: u64, min_batch: u64) -> u64 {
+    (n_photons / TARGET_BATCHES).clamp(min_batch, BATCH)
 }
 /// Fewest photons per batch of a rim walk ([`BackingOrders::past_rim_only`]): each of its
 /// photons is split into several walks, so small batches cost little set-up, and a run of a
@@ -61,11 +66,12 @@ pub const MIN_RIM_BATCH: u64 = 8;
 
 /// [`batch_size`], or for a rim walk the same with [`MIN_RIM_BATCH`].
 fn run_batch_size(cfg: &SlabConfig) -> u64 {
-    if cfg.is_rim_walk() {
-        (cfg.n_photons / TARGET_BATCHES).clamp(MIN_RIM_BATCH, BATCH)
+    let min_batch = if cfg.is_rim_walk() {
+        MIN_RIM_BATCH
     } else {
-        batch_size(cfg.n_photons)
-    }
+        MIN_BATCH
+    };
+    batch_size_from(cfg.n_photons, min_batch)
 }
 /// Below this weight the weighted estimator switches to the energy-exact roulette.
 const WEIGHT_THRESHOLD: f64 = 1e-4;
