@@ -12,34 +12,30 @@ from types import ModuleType
 
 
 class LazyModule(ModuleType):
-    """Stands for the module ``name`` and imports it when an attribute is first read."""
+    """Stands for the module ``name`` and imports it when an attribute is first read, after
+    calling ``before()`` (if given)."""
 
-    def __init__(self, name: str):
+    def __init__(self, name: str, before=None):
         super().__init__(name)
         self._module: ModuleType | None = None
+        self._before = before
 
     def __getattr__(self, attr: str):
         if self._module is None:
             if sys.modules.get(self.__name__) is self:
                 del sys.modules[self.__name__]  # the real module takes its place there
+            if self._before is not None:
+                self._before()
             self._module = importlib.import_module(self.__name__)
         return getattr(self._module, attr)
 
 
-def _colour() -> ModuleType:
+def _defer_plotting() -> None:
     # a stand-in registered first is what colour's own `from colour import plotting` finds
-    # (Python looks in sys.modules before importing a submodule); a plain attribute read on
-    # the stand-in, as the import system's, triggers nothing it does not define
+    # (Python looks in sys.modules before importing a submodule); the import system reads
+    # only attributes a module defines (__spec__), which trigger nothing
     if "colour" not in sys.modules:
         sys.modules.setdefault("colour.plotting", LazyModule("colour.plotting"))
-    return importlib.import_module("colour")
 
 
-class _Colour(LazyModule):
-    def __getattr__(self, attr: str):
-        if self._module is None:
-            self._module = _colour()
-        return getattr(self._module, attr)
-
-
-colour = _Colour("colour")
+colour = LazyModule("colour", before=_defer_plotting)

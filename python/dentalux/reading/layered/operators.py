@@ -285,4 +285,3 @@ def join(a: Element, b: Element, beam: int, below: int) -> tuple[np.ndarray, ...
 def _apply(m: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Matrices times vectors over the leading axes."""
     return (m @ v[..., None])[..., 0]
-
