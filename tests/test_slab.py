@@ -505,6 +505,36 @@ CONTRACT_KEYS = {
 }
 
 
+LANES_STACK = [Layer(mua=0.3, mus=15.0, g=0.8, n=1.62, thickness=0.4),
+               Layer(mua=0.05, mus=25.0, g=0.9, n=1.54, thickness=0.8, fd=0.3)]
+
+
+def test_lanes_walk_agrees_with_the_scalar_walk_and_its_stderr_is_honest():
+    """The weighted walk in vector lanes (the default where it applies) against the walk of
+    one photon at a time, and its claimed standard error against the spread over 60 seeds
+    (the sample spread's own relative s.e. is 1/sqrt(2 * 59) = 9 %: 30 % is 3.3 of it)."""
+    runs = [simulate(LANES_STACK, n_photons=10_000, seed=s, estimator="weighted",
+                     n_below=1.33) for s in range(60)]
+    assert {r.walk for r in runs} == {"lanes"}
+    ref = simulate(LANES_STACK, n_photons=200_000, seed=1000, estimator="weighted",
+                   n_below=1.33, walk="scalar")
+    assert ref.walk == "scalar"
+    for key in ("diffuse_reflectance", "diffuse_transmittance", "absorbed"):
+        xs = np.array([getattr(r, key) for r in runs])
+        claimed = np.mean([r.stderr[key] for r in runs])
+        assert 0.7 < xs.std(ddof=1) / claimed < 1.3, key
+        se = math.hypot(claimed / math.sqrt(len(runs)), ref.stderr[key])
+        assert abs(xs.mean() - getattr(ref, key)) < 4 * se, key
+
+
+def test_walk_names_are_checked():
+    with pytest.raises(ValueError, match="walk = 'simd'"):
+        simulate(LANES_STACK, n_photons=100, walk="simd")
+    # the analog estimator and a window are walked one photon at a time
+    assert simulate(LANES_STACK, n_photons=100).walk == "scalar"
+    assert simulate(LANES_STACK, n_photons=100, estimator="weighted").walk == "lanes"
+
+
 def test_python_api_contract():
     r = dentalux.slab.simulate(
         layers=[dentalux.Layer(mua=1.0, mus=9.0, g=0.75, n=1.0, thickness=0.2, fd=0.0)],

@@ -43,6 +43,7 @@ def slab_simulate(
     angular_bins: int | None = None,
     window: WindowTuple | None = None,
     progress: Callable[[int], None] | None = None,
+    lanes: bool = True,
 ) -> dict: ...
 def slab_read_bands(
     bands: list[list[LayerTuple]],

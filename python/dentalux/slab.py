@@ -86,9 +86,14 @@ class SlabResult:
     angular_transmittance: list[float] = field(default_factory=list)
     window: dict[str, float] = field(default_factory=dict)
     window_stderr: dict[str, float] = field(default_factory=dict)
+    #: "lanes" (photons stepped together in vector lanes) or "scalar" (one at a time)
+    walk: str = "scalar"
 
     def to_dict(self) -> dict:
+        """The result as the command line's JSON contract has it (``walk`` is not part of
+        the contract)."""
         d = asdict(self)
+        d.pop("walk")
         if not self.window:  # only a run with an instrument window has these tallies
             d.pop("window")
             d.pop("window_stderr")
@@ -144,6 +149,7 @@ def simulate(
     band: int = 0,
     window: tuple | None = None,
     progress: bool | None = False,
+    walk: str = "auto",
 ) -> SlabResult:
     """Simulate a layered slab lit from above; see :class:`SlabResult`.
 
@@ -157,7 +163,14 @@ def simulate(
     form ``(illuminated_radius, viewed_radius, specimen_radius, backing, cone)`` is the two
     discs. Its tallies come back in ``window``. The same ``seed`` gives the same numbers for
     any ``threads``.
+
+    ``walk="auto"`` steps photons together in vector lanes where that walk applies (the
+    weighted estimator with no window and no radial or angular profile), on every CPU to
+    the same bits; ``walk="scalar"`` walks one photon at a time (the reference the lanes
+    are tested against). ``SlabResult.walk`` says which ran.
     """
+    if walk not in ("auto", "scalar"):
+        raise ValueError(f"walk = {walk!r}: allowed 'auto' or 'scalar'")
     if isinstance(layers, Layer):
         layers = [layers]
     layers = limits.check_layers(layers)
@@ -191,6 +204,7 @@ def simulate(
             angular_bins=angular_bins,
             window=window,
             progress=cb,
+            lanes=walk == "auto",
         )
     seconds = time.perf_counter() - start
     return SlabResult(
@@ -207,4 +221,5 @@ def simulate(
         angular_transmittance=raw["angular_transmittance"],
         window=raw.get("window", {}),
         window_stderr=raw.get("window_stderr", {}),
+        walk=raw["walk"],
     )

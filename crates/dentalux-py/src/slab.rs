@@ -3,7 +3,8 @@
 use crate::runner;
 use dentalux_core::instrument::{Window, WINDOW_KEYS};
 use dentalux_core::integrators::slab::{
-    simulate, simulate_all, BackingOrders, Estimator, Incidence, SlabConfig, SlabLayer, SCALAR_KEYS,
+    simulate_all, simulate_with, BackingOrders, Estimator, Incidence, SlabConfig, SlabLayer,
+    SCALAR_KEYS,
 };
 use dentalux_core::integrators::slab_spectral::{simulate_spectral, SpectralConfig};
 use dentalux_core::medium::Medium;
@@ -37,7 +38,7 @@ type WindowTuple = (f64, f64, f64, f64, f64, f64, Option<(f64, f64)>);
 #[pyfunction]
 #[pyo3(signature = (layers, n_photons, seed, n_above=1.0, n_below=1.0, incidence="normal",
     angle_deg=0.0, estimator="analog", threads=None, band=0, radial=None, angular_bins=None,
-    window=None, progress=None))]
+    window=None, progress=None, lanes=true))]
 #[allow(clippy::too_many_arguments)]
 pub fn slab_simulate<'py>(
     py: Python<'py>,
@@ -55,6 +56,7 @@ pub fn slab_simulate<'py>(
     angular_bins: Option<usize>,
     window: Option<WindowTuple>,
     progress: Option<PyObject>,
+    lanes: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let stack = stack_from(layers, "")?;
     let incidence = Incidence::parse(incidence, angle_deg).map_err(runner::to_py_err)?;
@@ -74,7 +76,7 @@ pub fn slab_simulate<'py>(
         backing_orders: None,
     };
     cfg.validate().map_err(runner::to_py_err)?;
-    let res = runner::run(py, threads, progress, |c| simulate(&cfg, c))?;
+    let res = runner::run(py, threads, progress, |c| simulate_with(&cfg, c, lanes))?;
     let out = PyDict::new(py);
     let err = PyDict::new(py);
     for (i, k) in SCALAR_KEYS.iter().enumerate() {
@@ -84,6 +86,7 @@ pub fn slab_simulate<'py>(
     out.set_item("stderr", err)?;
     out.set_item("absorbed_per_layer", res.absorbed_per_layer)?;
     out.set_item("photons", res.photons)?;
+    out.set_item("walk", if res.lanes { "lanes" } else { "scalar" })?;
     out.set_item("radial_reflectance", res.radial_reflectance)?;
     out.set_item("radial_transmittance", res.radial_transmittance)?;
     out.set_item("angular_reflectance", res.angular_reflectance)?;

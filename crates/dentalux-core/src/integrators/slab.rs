@@ -274,6 +274,8 @@ pub struct SlabResult {
     pub batch_photons: Vec<u64>,
     /// Weight cut at the highest backing order, per photon launched.
     pub truncated: f64,
+    /// Whether the photons were walked in lanes ([`simulate_with`]).
+    pub lanes: bool,
 }
 
 impl SlabResult {
@@ -443,10 +445,17 @@ impl Tally {
 /// rayon pool and are reduced in batch order, so a seed gives the same numbers for any
 /// thread count.
 pub fn simulate(cfg: &SlabConfig, control: &Control) -> Result<SlabResult> {
+    simulate_with(cfg, control, true)
+}
+
+/// [`simulate`], by the lanes walk where it applies (the weighted estimator with no lateral
+/// tally, see slab_lanes.rs) when `lanes`, else by the walk of one photon at a time.
+pub fn simulate_with(cfg: &SlabConfig, control: &Control, lanes: bool) -> Result<SlabResult> {
     cfg.validate()?;
     let batch = run_batch_size(cfg);
     let n_batches = cfg.n_photons.div_ceil(batch);
     let tracer = Tracer::new(cfg);
+    let plan = if lanes { lanes::Plan::new(cfg) } else { None };
     // collecting into a Result stops handing out batches after the first error
     let tallies: Result<Vec<Tally>> = (0..n_batches)
         .into_par_iter()
@@ -455,6 +464,11 @@ pub fn simulate(cfg: &SlabConfig, control: &Control) -> Result<SlabResult> {
             let count = batch.min(cfg.n_photons - b * batch);
             let mut rng = Stream::new(cfg.seed, cfg.band, b);
             let mut tally = Tally::new(cfg);
+            if let Some(plan) = &plan {
+                lanes::run_batch(plan, &mut rng, count, &mut tally, control)?;
+                control.add_done(count);
+                return Ok(tally);
+            }
             let mut photon = [0.0; N_TALLIES];
             for _ in 0..count {
                 photon.fill(0.0);
@@ -474,6 +488,7 @@ pub fn simulate(cfg: &SlabConfig, control: &Control) -> Result<SlabResult> {
         total.merge(t);
     }
     let mut res = tracer.finish(&total);
+    res.lanes = plan.is_some();
     if cfg.backing_orders.is_some() {
         // consecutive batches pooled into at most REPLICATES groups: independent replicates
         // whose spread gives the standard error of anything computed from the polynomial
@@ -1186,9 +1201,13 @@ impl<'a> Tracer<'a> {
             order_sums: Vec::new(),
             batch_photons: Vec::new(),
             truncated: t.truncated / n,
+            lanes: false,
         }
     }
 }
+
+#[path = "slab_lanes.rs"]
+mod lanes;
 
 #[cfg(test)]
 #[path = "slab_tests.rs"]
