@@ -3,7 +3,8 @@
 Two cases from issue 2: MCML's classic slab (mua 1/mm, mus 9/mm, g 0.75, n 1, d 0.2 mm) and
 a dentin-like thick slab (mua 0.04/mm, mus 26/mm, g 0.9, n 1.54, d 2 mm; both in air), with
 both estimators. MCML uses weight deposition, so the "weighted" rows are the like-for-like
-comparison.
+comparison; the weighted estimator is run both ways it can walk: in vector lanes (16 photons
+together, its default here) and one photon at a time (walk="scalar"), for their ratio.
 
 MCML side by side (--mcml PATH): given an MCML executable, the script runs it on the same
 two cases in the same run, on one core, and prints its photons per CPU-second (the child
@@ -48,8 +49,12 @@ import tempfile
 import time
 from pathlib import Path
 
-from dentalux import Layer
-from dentalux.slab import SlabResult, simulate
+# the walks use no BLAS, but OpenBLAS's idle threads spin after numpy's import and their CPU
+# time would be billed to the walk's photons per CPU-second: one BLAS thread
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+from dentalux import Layer  # noqa: E402
+from dentalux.slab import SlabResult, simulate  # noqa: E402
 
 MCML_QUOTED = {"classic": 4.1e6, "dentin-like": 63e3}  # photons/s, one core (issue 2)
 CASES = {
@@ -58,7 +63,7 @@ CASES = {
 }
 
 
-def best_rate(layer: Layer, photons: int, threads: int, estimator: str,
+def best_rate(layer: Layer, photons: int, threads: int, estimator: str, walk: str,
               repeat: int) -> tuple[float, float, SlabResult]:
     """Highest photons per wall second and per CPU second over `repeat` runs, and the
     first run's result."""
@@ -66,7 +71,7 @@ def best_rate(layer: Layer, photons: int, threads: int, estimator: str,
     for i in range(repeat):
         c0 = time.process_time()
         r = simulate([layer], n_photons=photons, seed=1 + i, threads=threads,
-                     estimator=estimator)
+                     estimator=estimator, walk=walk)
         wall.append(r.photons / r.seconds)
         cpu.append(r.photons / max(time.process_time() - c0, 1e-9))
         first = first or r
@@ -151,7 +156,7 @@ def main() -> None:
               "CPU-second).\n")
     else:
         print("MCML figures are quoted from issue 2 (gcc -O2, one core), not measured here.\n")
-    header = (f"{'case':12} {'estimator':9} {'photons':>9} {'1 thread /s':>12} "
+    header = (f"{'case':12} {'estimator':9} {'walk':6} {'photons':>9} {'1 thread /s':>12} "
               f"{'/CPU-s':>12} {'MCML /s':>9} {'x MCML':>14} {f'{n_cpu} thr /s':>12} "
               f"{'/CPU-s':>12} {'scaling':>8} {'CPU eff.':>8}")
     print(header)
@@ -162,24 +167,28 @@ def main() -> None:
         mcml = MCML_QUOTED[name]
         if args.mcml:
             mcml, rd, tt = run_mcml(args.mcml, layer, photons, args.mcml_batches, args.repeat)
-        for estimator in ("analog", "weighted"):
-            one, one_cpu, res = best_rate(layer, photons, 1, estimator, args.repeat)
-            many, many_cpu, _ = best_rate(layer, photons, n_cpu, estimator, args.repeat)
+        for estimator, walk in (("analog", "scalar"), ("weighted", "scalar"),
+                                ("weighted", "auto")):
+            one, one_cpu, res = best_rate(layer, photons, 1, estimator, walk, args.repeat)
+            many, many_cpu, _ = best_rate(layer, photons, n_cpu, estimator, walk, args.repeat)
             ratio = f"{one / mcml:.2f} ({one_cpu / mcml:.2f})"
-            print(f"{name:12} {estimator:9} {photons:9d} {one:12,.0f} {one_cpu:12,.0f} "
+            print(f"{name:12} {estimator:9} {res.walk:6} {photons:9d} {one:12,.0f} "
+                  f"{one_cpu:12,.0f} "
                   f"{mcml:9,.0f} {ratio:>14} {many:12,.0f} {many_cpu:12,.0f} "
                   f"{many / one:8.2f} {many_cpu / one_cpu:8.2f}", flush=True)
-            if args.mcml and estimator == "weighted":
+            if args.mcml and estimator == "weighted" and res.walk == "lanes":
                 ours_rd = (res.diffuse_reflectance, res.stderr["diffuse_reflectance"])
                 ours_tt = (res.total_transmittance, res.stderr["total_transmittance"])
                 checks.append(f"{name:12} Rd {agreement(rd, ours_rd)}   "
                               f"Tt {agreement(tt, ours_tt)}")
     print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     if checks:
-        print(f"\nsame answers? MCML ({args.mcml_batches} batches) vs dentalux weighted "
-              "(1 thread, seed 1): Rd and Tt (unscattered included)")
+        print(f"\nsame answers? MCML ({args.mcml_batches} batches) vs dentalux weighted in "
+              "lanes (1 thread, seed 1): Rd and Tt (unscattered included)")
         print("\n".join(checks))
-    print("\nx MCML: wall-clock rate on one thread over MCML's (in brackets: per CPU-second).")
+    print("\nwalk: 'lanes' steps 16 photons together (the weighted estimator's default without")
+    print("profiles or a window); 'scalar' one photon at a time (walk='scalar').")
+    print("x MCML: wall-clock rate on one thread over MCML's (in brackets: per CPU-second).")
     print("scaling: wall-clock rate on all threads over one thread; CPU eff.: the same ratio of")
     print("photons per CPU-second (1.0 = no work lost to threading).")
     print("targets: x MCML >= 2 per core, scaling >= 1.8 on 2 threads (issue 2); x MCML >= 10")
