@@ -40,7 +40,7 @@ the ``infinite`` geometry's independent runs, by adding their variances.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import NamedTuple
 
@@ -116,6 +116,12 @@ class DentalMetrics:
     instrument: dict = field(default_factory=dict)
     edge_loss: dict = field(default_factory=dict)
     layers: list = field(default_factory=list)
+    # where the rim walk saw no event: its photons per band, the bands of each channel, and
+    # what their standard error is (rim_note); empty where it saw events everywhere
+    rim_bound: dict = field(default_factory=dict)
+    # with rim_bound: the standard errors from the replicates alone, without the zero
+    # count's bound (not in the JSON)
+    replicate_stderr: dict = field(default_factory=dict)
 
     def error(self, key: str) -> Lab | float:
         """The standard error of ``key``: a :class:`Lab` of errors for a colour, a float for
@@ -160,6 +166,8 @@ class DentalMetrics:
         out["method"] = self.method
         if self.precision:
             out["precision"] = self.precision
+        if self.rim_bound:
+            out["rim_bound"] = self.rim_bound
         out["wavelength_nm"] = self.wavelengths_nm
         for backing in ("black", "white"):
             out[f"reflectance_{backing}"] = self.spectra.get(f"over_{backing}", [])
@@ -307,16 +315,24 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     rec = Reconstruction(wl, grid=cs.wavelengths, basis=reconstruction)
     spectra = reading.measure(reading.stacks(parts, wl), wl, inst, rb_black, rb_white,
                               photons, seed, estimator, threads, progress, walks, solver)
-    out, errs = spectra.propagate(lambda b: colour_of(b, cs, rec, op_backing))
-    stderr = {k: float(errs[k]) for k in ("tp", "tp00", "cr", "op")}
-    for key in ("lab_black", "lab_white", "lab_transmitted"):
-        for j, c in enumerate("Lab"):
-            stderr[f"{key}.{c}"] = float(errs[key][j])
+
+    def metrics_of(batch):
+        return colour_of(batch, cs, rec, op_backing)
+
+    out, errs = spectra.propagate(metrics_of)
+    stderr = _flat_stderr(errs)
+    # the replicates' part alone, where a rim walk's zero count bounds the rest: the two
+    # fall differently with photons (_precision_plan)
+    replicate_stderr = (_flat_stderr(replace(spectra, rim_bounds=()).propagate(metrics_of)[1])
+                        if spectra.rim_bounds else {})
     names = reading.CHANNELS
     spectra_out = {
         **{k: spectra.values[i] for i, k in enumerate(names)},
         **{f"{k}_stderr": spectra.stderr[i] for i, k in enumerate(names)},
     }
+    if spectra.rim_bounds:  # the noise alone, which `fit --readings` weighs by (not in JSON)
+        spectra_out.update({f"{k}_replicate_stderr": v
+                            for k, v in zip(names, spectra.replicate_stderr(), strict=True)})
     if inst.is_infinite:
         spectra_out.update({k: spectra.extra[k] for k in reading.engine.ADDING_INPUTS})
         spectra_out.update({f"{k}_stderr": spectra.extra[f"{k}_stderr"]
@@ -352,7 +368,38 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
         edge_loss=edge_loss,
         layers=[{"material": str(getattr(m, "name", "material")), "thickness_mm": t}
                 for m, t in parts],
+        rim_bound=rim_note(spectra),
+        replicate_stderr=replicate_stderr,
     )
+
+
+def _flat_stderr(errs: dict) -> dict[str, float]:
+    """Propagated standard errors under DentalMetrics.stderr's flat keys."""
+    stderr = {k: float(errs[k]) for k in ("tp", "tp00", "cr", "op")}
+    for key in ("lab_black", "lab_white", "lab_transmitted"):
+        for j, c in enumerate("Lab"):
+            stderr[f"{key}.{c}"] = float(errs[key][j])
+    return stderr
+
+
+def rim_note(spectra) -> dict:
+    """Where the layered solver's rim walk saw no event (no photon brought light past the
+    specimen's rim into the window) in a band and channel: ``{}`` if nowhere, else the
+    photons it launched per band (one per engine.RIM_SHARE of the budget), those bands per
+    channel, and what their standard error is."""
+    zero = np.zeros(spectra.values.shape, dtype=bool)
+    for b in spectra.rim_bounds:
+        zero |= b.effect != 0
+    if not zero.any():
+        return {}
+    launched = spectra.extra.get("rim_launched_per_band")
+    wl = np.asarray(spectra.wavelengths_nm, dtype=float)
+    return {"launched_per_band": launched,
+            "bands_nm": {k: wl[zero[i]].tolist() for i, k in enumerate(reading.CHANNELS)},
+            "note": f"no photon of the rim walk ({launched} launched per band) brought light "
+                    "past the specimen's rim into the window in these bands: their standard "
+                    "error is the bound from that zero count (the rule of three and the most "
+                    "one photon can carry), not a spread between replicates"}
 
 
 # photons per band of the pilot reading that sizes a run for a requested precision: 32
@@ -365,11 +412,38 @@ PILOT_SEED_OFFSET = 7_919
 PRECISION_MARGIN = 1.2
 
 
-def reading_precision(m: DentalMetrics) -> float:
+def reading_precision(m: DentalMetrics, stderr: dict | None = None) -> float:
     """The reading's standard error in ΔE00 units: the larger of the colours over black and
-    over white (:func:`dentalux.color.delta_e00_scale`)."""
-    return max(delta_e00_scale(getattr(m, f"lab_{b}"), [m.stderr[f"lab_{b}.{c}"] for c in "Lab"])
-               for b in ("black", "white"))
+    over white (:func:`dentalux.color.delta_e00_scale`); ``stderr``: other standard errors
+    of the same reading (default ``m.stderr``)."""
+    return max(_backing_precision(m, b, stderr) for b in ("black", "white"))
+
+
+def _backing_precision(m: DentalMetrics, backing: str, stderr: dict | None = None) -> float:
+    se = m.stderr if stderr is None else stderr
+    return delta_e00_scale(getattr(m, f"lab_{backing}"),
+                           [se[f"lab_{backing}.{c}"] for c in "Lab"])
+
+
+def _photons_needed(pilot: DentalMetrics, target: float) -> int:
+    """Photons per band that bring ``pilot``'s precision to ``target`` with the margin: the
+    replicates' variance falls as 1 / photons; where a rim walk saw no event, the zero
+    count's bound (sqrt(3) B / N) falls as 1 / photons^2 in variance."""
+    if not pilot.replicate_stderr:
+        p0 = reading_precision(pilot)
+        return int(np.ceil(PILOT_PHOTONS * PRECISION_MARGIN * (p0 / target) ** 2))
+    need = 0.0
+    aim = target**2 / PRECISION_MARGIN
+    for b in ("black", "white"):
+        rep = _backing_precision(pilot, b, pilot.replicate_stderr) ** 2
+        bound = max(_backing_precision(pilot, b) ** 2 - rep, 0.0)
+        # x = PILOT_PHOTONS / photons solves rep x + bound x^2 = aim
+        if bound > 0.0:
+            x = (np.sqrt(rep**2 + 4.0 * bound * aim) - rep) / (2.0 * bound)
+        else:
+            x = aim / rep if rep > 0.0 else np.inf
+        need = max(need, PILOT_PHOTONS / x)
+    return int(np.ceil(need))
 
 
 def check_precision(precision, name: str = "precision") -> float:
@@ -408,8 +482,7 @@ def _precision_plan(specimen, precision, seed: int = 1, name: str = "precision",
                                "pilot_precision": 0.0, "photons_per_band": 0,
                                "estimated_cpu_seconds": pilot.cpu_seconds}, pilot
     p0 = reading_precision(pilot)
-    need = int(np.ceil(PILOT_PHOTONS * PRECISION_MARGIN * (p0 / target) ** 2))
-    need = max(need, PILOT_PHOTONS)
+    need = max(_photons_needed(pilot, target), PILOT_PHOTONS)
     fixed = pilot.fixed_cpu_seconds
     cpu = fixed + (pilot.cpu_seconds - fixed) * need / PILOT_PHOTONS
     plan = {"requested": target, "noise_free": False, "pilot_photons": PILOT_PHOTONS,

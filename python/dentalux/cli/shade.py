@@ -138,6 +138,13 @@ def shade_command(
                          "Carlo noise" if p["noise_free"] else
                          f"; precision asked {p['requested']:g}, reached {p['achieved']:.3f} "
                          f"ΔE00 ({p['photons_per_band']} photons per band)")
+    if "rim_bound" in m:  # the standard error of these bands is the zero count's bound
+        rb = m["rim_bound"]
+        seen = {nm for bands in rb["bands_nm"].values() for nm in bands}
+        photons_line += (f"\nno photon of the rim walk ({rb['launched_per_band']} per band) "
+                         f"reached the window from past the rim in {len(seen)} of "
+                         f"{len(m['wavelength_nm'])} bands: their standard error is the "
+                         "bound from that zero count")
     table.caption = photons_line
     Console().print(table)
 

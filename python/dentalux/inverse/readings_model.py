@@ -10,8 +10,10 @@
   spectrum is tabulated at its lowest and highest reflectance and interpolated linearly
   between them, band by band; the fit's defect correction takes up what that misses.
 
-The model's error beside each value is its standard error (Monte Carlo, or the rim
-correction's) and, with the layered solver, its stated accuracy (:data:`ACCURACY`, relative).
+The model's error beside each value is its standard error between replicates (Monte Carlo,
+or the rim correction's; not the bound that stands for it where the rim walk saw no event,
+:func:`replicate_stderr`) and, with the layered solver, its stated accuracy
+(:data:`ACCURACY`, relative).
 """
 
 from __future__ import annotations
@@ -47,6 +49,14 @@ def km_reflectance(mua, mus, g: float, n: float, thickness, rg, diffuse_only: bo
     r = (1.0 - rg * (a - bcoth)) / (a - rg + bcoth)
     k1, k2 = specular(n, 1.0), moments(n, 1.0)[0]
     return (0.0 if diffuse_only else k1) + (1.0 - k1) * (1.0 - k2) * r / (1.0 - k2 * r)
+
+
+def replicate_stderr(m, name: str) -> list[float]:
+    """The model's noise in reading ``name`` of ``m`` (a DentalMetrics): its standard error
+    between replicates. Where the rim walk saw no event the reading's standard error is a
+    bound from that zero count instead (engine.rim_bound), far above what the term turns
+    out to be; the fit weighs residuals and smooths its table by noise, not by that bound."""
+    return m.spectra.get(f"{name}_replicate_stderr", m.spectra[f"{name}_stderr"])
 
 
 class Problem:
@@ -163,7 +173,7 @@ class Problem:
         for key, j in self.slot:
             name = f"over_{SLOTS[j]}"
             vals.append(got[key].spectra[name])
-            errs.append(got[key].spectra[f"{name}_stderr"])
+            errs.append(replicate_stderr(got[key], name))
         return np.asarray(vals), self.model_err(vals, np.asarray(errs))
 
     def _levels(self, key) -> list[list[float]]:
@@ -200,7 +210,7 @@ class Problem:
                             continue
                         name = f"over_{SLOTS[j]}"
                         v = np.asarray(got[key].spectra[name]).reshape(a.shape)
-                        e = np.asarray(got[key].spectra[f"{name}_stderr"]).reshape(a.shape)
+                        e = np.asarray(replicate_stderr(got[key], name)).reshape(a.shape)
                         # a smoothing spline: its squared misfit at the nodes is about their
                         # summed noise variance, so it follows the surface, not the noise
                         self.tables[(key, j)].append((

@@ -31,7 +31,7 @@ from threadpoolctl import threadpool_limits
 
 from dentalux import _core, limits
 from dentalux.progress import bar
-from dentalux.reading.spectra import ReadSpectra, replicate_variance
+from dentalux.reading.spectra import ReadSpectra, RimBound, replicate_variance, with_bounds
 from dentalux.slab import Layer, parse_incidence, simulate
 
 # the core's tallies of a window run, in its order (instrument.rs WINDOW_KEYS)
@@ -196,6 +196,41 @@ def rim_photons(photons: int) -> int:
     return max(1, -(-int(photons) // RIM_SHARE))
 
 
+def rim_event_bound(inst, rb_black, rb_white, survival: float) -> np.ndarray:
+    """The most that one photon launched by the rim walk can take from each channel's reading
+    (channels × bands): its weight (1 at launch, never more but through the backing's
+    survival roulette, which the backing's reflectance R_b undoes order by order, (R_b /
+    survival)^k at order k) times what the window counts it (1 / the detector cone's
+    Lambertian fraction, as the core's Window::cone_fraction; the transmitted light has no
+    cone), over the reading's white normaliser."""
+    cone = inst.spec.cone_deg
+    gain = 1.0
+    if cone:
+        lo, hi = np.radians(cone)
+        gain = 1.0 / (np.sin(hi) ** 2 - np.sin(lo) ** 2)
+
+    def roulette(rb):
+        return np.maximum(1.0, np.asarray(rb, dtype=float) / survival) ** MAX_ORDER
+
+    return np.stack([gain * roulette(rb_black), gain * roulette(rb_white),
+                     np.ones(len(rb_black))]) / inst.white_fraction()
+
+
+def rim_bound(corr: np.ndarray, infinite: np.ndarray, bound: np.ndarray, launched: float,
+              channels) -> RimBound | None:
+    """The :class:`RimBound` of a rim walk whose replicates' terms are ``corr`` (R, channels,
+    bands; the term of a band and channel where the walk saw no event is exactly 0 in every
+    replicate, its tallies' weights being positive) for the ``channels`` it reads, from the
+    most one photon can take (``bound``, :func:`rim_event_bound`) and the laterally infinite
+    specimen's readings (``infinite``); None where it saw an event everywhere."""
+    none = np.all(corr == 0.0, axis=0)
+    none[[c for c in range(none.shape[0]) if c not in channels]] = False
+    if not none.any():
+        return None
+    return RimBound(effect=np.where(none, -bound, 0.0),
+                    cap=np.where(none, np.maximum(infinite, 0.0), 0.0), launched=launched)
+
+
 def check_batches(photons: int, rim: bool) -> None:
     """Refuse a Monte Carlo part that would run as one batch: its standard error comes from
     the spread between batches, and one batch has none (it read 0). The core's smallest
@@ -315,7 +350,7 @@ def solved(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
         if not rim:
             n_rep = np.ones(1)
             sums, t_sums = sums[:, None], t_sums[:, None]
-            mc_photons = 0
+            mc_photons, bounds = 0, ()
         else:
             limits.check_slab(photons, threads, seed=seed)
             check_batches(photons, rim=True)
@@ -326,6 +361,8 @@ def solved(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
             sources = rim_photons(photons)
             corr, n_rep, _ = _ordered_runs(band_stacks, inst, sources, seed, key, n_below,
                                            estimator, threads, None, survival, True)
+            infinite = _channels(sums[:, None], t_sums[:, None], inst, rb_black, rb_white)[0]
+            t_corr = corr
             sums = sums[:, None] * n_rep[None, :, None, None] - corr
             if contact is None:
                 t_sums = sums
@@ -333,13 +370,22 @@ def solved(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
                 t_corr = _ordered_runs(band_stacks, inst, sources, seed, t_key, 1.0,
                                        estimator, threads, None, survival, True)[0]
                 t_sums = t_sums[:, None] * n_rep[None, :, None, None] - t_corr
+            # where the rim walk saw no event its replicates agree: the zero count's bound
+            # stands for their spread (spectra.RimBound); a contact's transmitted light is
+            # its own walk
+            terms = _channels(corr, t_corr, inst, rb_black, rb_white)
+            bound = rim_event_bound(inst, rb_black, rb_white, survival)
+            walks = [(0, 1, 2)] if contact is None else [(0, 1), (2,)]
+            bounds = tuple(b for b in (rim_bound(terms, infinite, bound, float(n_rep.sum()),
+                                                 w) for w in walks) if b is not None)
             mc_photons = int(photons) * wl_count * runs  # the budget (RIM_SHARE)
             if cb:
                 cb(total)
+    extra = {"runs": runs, "rim_correction": bool(rim), "solver_cpu_seconds": solver_cpu}
+    if rim:
+        extra["rim_launched_per_band"] = int(n_rep.sum())
     return _spectra(sums, t_sums, n_rep, inst, rb_black, rb_white, start_cpu, start,
-                    photons=mc_photons, method="layered",
-                    extra={"runs": runs, "rim_correction": bool(rim),
-                           "solver_cpu_seconds": solver_cpu})
+                    photons=mc_photons, method="layered", extra=extra, bounds=bounds)
 
 
 def windowed(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
@@ -387,11 +433,9 @@ def windowed(band_stacks, inst, rb_black, rb_white, photons: int, seed: int,
                            "survival": survival, **extra})
 
 
-def _spectra(sums, t_sums, n_rep, inst, rb_black, rb_white, start_cpu, start, photons,
-             method, extra) -> ReadSpectra:
-    """The readings over black, over white and in transmission from order sums (bands,
-    replicates, orders + 1, keys) and the photons of each replicate."""
-    wl_count = sums.shape[0]
+def _channels(sums, t_sums, inst, rb_black, rb_white) -> np.ndarray:
+    """The readings over black, over white and in transmission (R, channels, bands) that
+    order sums (bands, R, orders + 1, keys) tally, unnormalised by photons."""
     spec = inst.spec
     read_key = "viewed_cone_reflectance" if spec.cone_deg else "viewed_reflectance"
     f = inst.white_fraction()
@@ -402,9 +446,17 @@ def _spectra(sums, t_sums, n_rep, inst, rb_black, rb_white, start_cpu, start, ph
             v = v - _polynomial(sums, "viewed_specular", rb)
         return v / f
 
-    zero = np.zeros(wl_count)
-    per_rep = np.stack([reading(rb_black), reading(rb_white),
-                        _polynomial(t_sums, "viewed_transmittance", zero) / f], axis=1)
+    zero = np.zeros(sums.shape[0])
+    return np.stack([reading(rb_black), reading(rb_white),
+                     _polynomial(t_sums, "viewed_transmittance", zero) / f], axis=1)
+
+
+def _spectra(sums, t_sums, n_rep, inst, rb_black, rb_white, start_cpu, start, photons,
+             method, extra, bounds=()) -> ReadSpectra:
+    """The readings over black, over white and in transmission from order sums (bands,
+    replicates, orders + 1, keys) and the photons of each replicate (``bounds``: the rim
+    walks' :class:`RimBound`, where they saw no event)."""
+    per_rep = _channels(sums, t_sums, inst, rb_black, rb_white)
     loss = np.stack([_polynomial(sums, "outside_reflectance", rb)
                      + _polynomial(sums, "rim_loss", rb) for rb in (rb_black, rb_white)], axis=1)
     # replicate estimates are sums over their photons: means per replicate, and the overall
@@ -415,10 +467,10 @@ def _spectra(sums, t_sums, n_rep, inst, rb_black, rb_white, start_cpu, start, ph
     var = replicate_variance(weights, reps - values)
     edge = np.tensordot(weights, loss / n_rep[:, None, None], axes=([0], [0]))
     return ReadSpectra(
-        wavelengths_nm=np.zeros(0), values=values, stderr=np.sqrt(var), edge_loss=edge,
-        photons=photons, cpu_seconds=time.process_time() - start_cpu, method=method,
-        replicates=reps, replicate_weights=weights,
-        extra={"seconds": time.perf_counter() - start, **extra})
+        wavelengths_nm=np.zeros(0), values=values, stderr=with_bounds(var, bounds),
+        edge_loss=edge, photons=photons, cpu_seconds=time.process_time() - start_cpu,
+        method=method, replicates=reps, replicate_weights=weights,
+        extra={"seconds": time.perf_counter() - start, **extra}, rim_bounds=bounds)
 
 
 # the adding formula's per-band inputs, in the order of ReadSpectra.inputs (the fifth input

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dentalux.reading.spectra import replicate_variance
+from dentalux.reading.spectra import RimBound, replicate_variance, with_bounds
 
 # the tile's walks use seed + this (mod 2^64): independent of the specimen's photons
 SEED_OFFSET = 104_729
@@ -89,8 +89,18 @@ def calibrate(out, wl, inst, rb_black, photons: int, seed: int, estimator: str, 
         reps[:, c] = cert * (s_reps[:, c] / t_bar - out.values[c] * dev_t / t_bar**2)
         values[c] = cert * out.values[c] / t_bar
     var = replicate_variance(w, reps - values)
+    # where a rim walk saw no event (spectra.RimBound): the specimen's terms are divided by
+    # the tile as its reading is; the tile's own lower the tile, which raises the reading
+    scale = np.ones_like(out.values)
+    scale[list(CALIBRATED)] = cert / t_bar
+    bounds = [RimBound(b.effect * scale, b.cap * scale, b.launched) for b in out.rim_bounds]
+    raise_by = np.zeros_like(out.values)
+    raise_by[list(CALIBRATED)] = cert * out.values[list(CALIBRATED)] / t_bar**2
+    bounds += [RimBound(-b.effect[0] * raise_by, b.cap[0] * raise_by, b.launched)
+               for b in tile.rim_bounds if np.any(b.effect[0])]
     out.values, out.replicates, out.replicate_weights = values, reps, w
-    out.stderr = np.sqrt(var)
+    out.stderr = with_bounds(var, bounds)
+    out.rim_bounds = tuple(bounds)
     out.photons += tile.photons
     out.extra["white_reference"] = {"tile_reading": t_bar.tolist(),
                                     "tile_reading_stderr": tile.stderr[0].tolist(),
