@@ -5,14 +5,18 @@ command line, in one run (2 cores).
 - ``python``: ``dental.read`` in a warm process with the solver's cache cleared, best of
   ``--repeats``; beside it the same with every spatial frequency solved
   (``window.nodes_for`` bypassed), for the ratio;
-- ``command line``: ``dentalux shade --layer ... --json`` as a new process, best of
-  ``--repeats``, and ``dentalux --help`` (the start-up alone).
+- ``command line``: ``dentalux shade --layer ... --json`` as a new process running the
+  source tree this script imports (PYTHONPATH set to it), best of ``--repeats``, and
+  ``dentalux --help`` (the start-up alone); ``--against DIR`` times another tree's ``python``
+  folder (say a worktree of the commit before) in the same run, the two alternating.
 
 The goal (issue 39) is a reading in at most 2 s wall. Start-up depends on Python's
 bytecode cache: a source tree run with PYTHONDONTWRITEBYTECODE set compiles the package's
-modules on every call (about 0.2 s more); an installed wheel has them compiled.
+modules on every call (about 0.2 s more); an installed wheel has them compiled. The command
+line is timed both ways: as the environment runs it, and with the bytecode kept (in a
+temporary PYTHONPYCACHEPREFIX that a first call fills), as an installed wheel runs.
 
-    .venv/bin/python benchmarks/reading_time.py [--repeats 3]
+    .venv/bin/python benchmarks/reading_time.py [--repeats 3] [--against DIR]
 """
 
 from __future__ import annotations
@@ -22,8 +26,11 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
+from pathlib import Path
 
+import dentalux
 from dentalux import dental, instrument
 from dentalux.reading import engine
 from dentalux.reading.layered import stack, window
@@ -44,20 +51,40 @@ def in_process(repeats: int) -> tuple[float, float, dict]:
     return best[0], best[1], m
 
 
-def command_line(args: list[str], repeats: int) -> float:
+def command_line(args: list[str], repeats: int, trees: list[str],
+                 pycache: str | None = None) -> list[float]:
+    """Best wall seconds of ``dentalux ARGS`` run from each source tree, the trees
+    alternating; ``pycache``: a folder that keeps the compiled modules between calls (a first
+    call, untimed, fills it)."""
     exe = shutil.which("dentalux") or os.path.join(os.path.dirname(sys.executable), "dentalux")
-    best = float("inf")
+    envs = []
+    for tree in trees:
+        env = {**os.environ, "PYTHONPATH": tree}
+        if pycache:
+            env.pop("PYTHONDONTWRITEBYTECODE", None)
+            env["PYTHONPYCACHEPREFIX"] = pycache
+            subprocess.run([exe, *args], check=True, stdout=subprocess.DEVNULL, env=env)
+        envs.append(env)
+    best = [float("inf")] * len(trees)
     for _ in range(repeats):
-        start = time.perf_counter()
-        subprocess.run([exe, *args], check=True, stdout=subprocess.DEVNULL)
-        best = min(best, time.perf_counter() - start)
+        for i, env in enumerate(envs):
+            start = time.perf_counter()
+            subprocess.run([exe, *args], check=True, stdout=subprocess.DEVNULL, env=env)
+            best[i] = min(best[i], time.perf_counter() - start)
     return best
+
+
+def show(label: str, times: list[float]) -> None:
+    against = f"   (against: {times[1]:5.2f} s)" if len(times) > 1 else ""
+    print(f"command line, {label:16s} {times[0]:5.2f} s wall{against}")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--against", help="another source tree's python folder, timed alongside")
     args = ap.parse_args()
+    trees = [str(Path(dentalux.__file__).parents[1])] + ([args.against] if args.against else [])
     name = instrument.DEFAULT
     cone, lit, view, pairs = engine._regions(instrument.get(name))
     nodes = window.nodes_for(window.as_pairs(lit, view, pairs))
@@ -75,9 +102,12 @@ def main() -> None:
     print(f"python, every node    {wall_all:5.2f} s wall  {cpu_all:5.2f} CPU-s  "
           f"L*a*b* white {tuple(round(x, 4) for x in m_all.lab_white)}  TP00 {m_all.tp00:.4f}")
     print(f"  CPU ratio every node / those nodes: {cpu_all / cpu:.2f}")
-    print(f"command line, shade   {command_line(COMMAND, args.repeats):5.2f} s wall")
-    print(f"command line, --help  {command_line(['--help'], args.repeats):5.2f} s wall")
-    print(f"(bytecode written: {not sys.dont_write_bytecode})")
+    show("shade", command_line(COMMAND, args.repeats, trees))
+    with tempfile.TemporaryDirectory(prefix="reading-time-") as pycache:
+        show("shade, bytecode", command_line(COMMAND, args.repeats, trees, pycache))
+    show("--help", command_line(["--help"], args.repeats, trees))
+    print(f"(this tree: {trees[0]}" + (f"; against: {trees[1]}" if args.against else "")
+          + f"; the environment writes bytecode: {not sys.dont_write_bytecode})")
 
 
 if __name__ == "__main__":

@@ -3,14 +3,16 @@ or how given thicknesses rank (``--evaluate``)."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import typer
-from rich import box
-from rich.console import Console
-from rich.table import Table
 
 from dentalux import instrument as instruments
 from dentalux.cli import measure_options
 from dentalux.strict_json import dumps_checked
+
+if TYPE_CHECKING:
+    from rich.table import Table
 
 
 def design_command(
@@ -102,6 +104,8 @@ def design_command(
             out["render"] = _render_json(rendered)
         print(dumps_checked(out, "design"))
         return
+    from rich.console import Console
+
     console = Console()
     console.print(design_table(res.target, res.designs, res.substrate,
                                res.instrument["name"]))
@@ -134,6 +138,9 @@ def design_table(target, designs: list[dict], substrate: str, instrument: str,
                  evaluated: bool = False) -> Table:
     """The designs (or ``--evaluate``'s candidates) as a table readable at 80 columns: short
     headers, no outer padding, the title and the verdicts wrapped at spaces, never cut."""
+    from rich import box
+    from rich.table import Table
+
     t = target
     what = "candidates ranked" if evaluated else "designs"
     table = Table(title=f"{what} for L*a*b* {t.lab[0]:.1f} {t.lab[1]:.1f} {t.lab[2]:.1f}"
@@ -198,6 +205,8 @@ def _evaluate(target, layer, evaluate, total, substrate, cement, instrument, tar
     if as_json:
         print(dumps_checked(res.to_json(), "design --evaluate"))
         return
+    from rich.console import Console
+
     console = Console()
     console.print(design_table(res.target, res.evaluated, res.substrate,
                                res.instrument["name"], evaluated=True))

@@ -6,8 +6,6 @@ import sys
 from pathlib import Path
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from dentalux import limits
 from dentalux.inverse import fit, fit_table, write_spectrum_toml
@@ -17,6 +15,9 @@ from dentalux.strict_json import dumps_checked
 
 
 def _print_results(results) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
     table = Table(title=f"inversion ({results[0].model})")
     for col in ("λ [nm]", "μa [1/mm]", "μa interval", "μs [1/mm]", "μs interval",
                 "μs' [1/mm]", "residual"):
@@ -95,6 +96,9 @@ def _fit_readings(readings_path: Path, instrument_name, g, n, model, photons, se
                           for r in res.residuals],
             "identifiable": res.identifiable, "model": res.model}, "fit"))
         return
+    from rich.console import Console
+    from rich.table import Table
+
     how = f"{res.model} ({res.solver})" if res.solver else res.model
     table = Table(title=f"{name}: {how} fit to {readings_path} read with {inst.name} "
                         f"(g {res.g:g}, n {res.n:g}; {res.seconds:.1f} s)")
@@ -200,6 +204,8 @@ def fit_command(
         else:
             _print_results(results)
             if out is not None:
+                from rich.console import Console
+
                 Console().print(f"wrote {out}")
         return
     missing = [k for k, v in (("tt", tt), ("tr", tr), ("n", n), ("g", g),

@@ -5,8 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from dentalux import shade_guides
 from dentalux.strict_json import dumps_checked
@@ -33,6 +31,9 @@ def list_command(as_json: bool = typer.Option(False, "--json", help="print JSON"
         print(dumps_checked({"guides": rows, "data_dir": str(shade_guides.data_dir())},
                             "guides list"))
         return
+    from rich.console import Console
+    from rich.table import Table
+
     table = Table(title=f"shade guides (imported ones in {shade_guides.data_dir() / 'guides'})")
     for col in ("name", "kind", "tabs", "with L*a*b*", "instrument"):
         table.add_column(col)
@@ -52,6 +53,9 @@ def show_command(name: str = typer.Argument(..., help="guide name or a guide FIL
             {"tab": t.tab, "lab": None if t.lab is None else list(t.lab), **t.source()}
             for t in tabs.values()]}, "guides show"))
         return
+    from rich.console import Console
+    from rich.table import Table
+
     table = Table(title=f"shade guide {name}")
     for col in ("tab", "L*", "a*", "b*", "status", "instrument", "source"):
         table.add_column(col)
@@ -77,6 +81,8 @@ def import_command(file: Path = typer.Argument(..., help="guide CSV: tab,L,a,b (
     if as_json:
         print(dumps_checked({**summary, "file": str(dest)}, "guides import"))
         return
+    from rich.console import Console
+
     Console().print(f"imported {summary['tabs']} tabs as {name!r} ({dest}); use --match {name} "
                     f"on shade, --target {name}:TAB on design")
 

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from dentalux import instrument
 from dentalux.reading import DEFAULT_SOLVER
@@ -21,6 +19,9 @@ def list_command(as_json: bool = typer.Option(False, "--json", help="print JSON"
     if as_json:
         print(dumps_checked({n: i.to_json() for n, i in presets.items()}, "instruments list"))
         return
+    from rich.console import Console
+    from rich.table import Table
+
     table = Table(title=f"instruments (default for `dentalux shade`: {instrument.DEFAULT})")
     for col in ("name", "class", "geometry", "lit [mm]", "viewed [mm]", "backings b / w",
                 "contact"):
@@ -43,6 +44,8 @@ def show_command(name: str = typer.Argument(..., help="preset name or TOML file"
         print(dumps_checked({**inst.to_json(), "description": inst.description,
                              "provenance": inst.provenance}, "instruments show"))
         return
+    from rich.console import Console
+
     console = Console()
     console.print(f"[bold]{inst.name}[/bold]: {inst.description}")
     for key, value in inst.to_json().items():
@@ -79,6 +82,8 @@ def validate_command(
         return
     cls = ic.classes()
     k = natural_teeth.SPREAD
+    from rich.console import Console
+
     console = Console()
     console.print(f"[bold]natural incisor[/bold] {ic.natural_incisor_text()} (substrate none, "
                   f"over the white backing) vs the class's published mean ± {k:g} SD")

@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import typer
-from rich import box
-from rich.console import Console
-from rich.table import Table
 
 from dentalux import materials as lib
 from dentalux.strict_json import dumps_checked
+
+if TYPE_CHECKING:
+    from rich.table import Table
 
 materials_app = typer.Typer(
     no_args_is_help=True,
@@ -39,6 +40,8 @@ def list_command(
     if as_json:
         print(dumps_checked({"materials": rows}, "materials list"))
         return
+    from rich.console import Console
+
     console = Console()
     console.print(list_table(rows, console.width))
 
@@ -48,6 +51,9 @@ def list_table(rows: list[dict], width: int = 80) -> Table:
     default name (``dentin``) says which variant it stands for, and the description is cut
     to the line (``materials show NAME`` prints it whole, with every value's source; ``--json``
     also gives the number of known wavelengths)."""
+    from rich import box
+    from rich.table import Table
+
     table = Table(title="materials", box=box.SIMPLE_HEAD, pad_edge=False, show_edge=False,
                   caption="whole descriptions and sources: dentalux materials show NAME")
     cells = []
@@ -89,6 +95,9 @@ def show_command(
     if as_json:
         print(dumps_checked(d, "materials show"))
         return
+    from rich.console import Console
+    from rich.table import Table
+
     console = Console()
     console.print(f"[bold]{m.name}[/bold]: {m.description}")
     table = Table(title="known values (mua, mus in 1/mm)")

@@ -5,8 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from dentalux.cli.render import parse_bands
 from dentalux.scene.load import load_scene
@@ -44,6 +42,9 @@ def check_command(
     if as_json:
         print(dumps_checked(summary, "scene check"))
         return
+    from rich.console import Console
+    from rich.table import Table
+
     table = Table(title=f"{scene_file}: valid")
     table.add_column("key")
     table.add_column("value")

@@ -3,14 +3,11 @@
 from __future__ import annotations
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
-from dentalux import dental, instrument, readings, shade_guides
+from dentalux import dental, instrument, shade_guides
 from dentalux.cli import measure_options as mo
 from dentalux.cli.measure_options import DEFAULTS
-from dentalux.outputs import dumps_strict
-from dentalux.strict_json import check_finite
+from dentalux.strict_json import check_finite, dumps_strict
 
 
 def shade_command(
@@ -52,6 +49,8 @@ def shade_command(
     """CIELAB over black/white and in transmission, TP, TP00, CR, OP as an instrument reads
     them (and ΔE00 vs --against, the nearest shade tabs with --match)."""
     if readings_out:
+        from dentalux import readings
+
         readings.check_out(readings_out)
     inst = instrument.get(instrument_name).override(
         illuminated_diameter_mm=illuminated_diameter, viewed_diameter_mm=viewed_diameter,
@@ -99,6 +98,9 @@ def shade_command(
              f"viewed {mm(ins['viewed_diameter_mm'])}, specular {ins['specular']}")
     title = (" / ".join(f"{n} {t:g} mm" for n, t in specimen) if specimen
              else f"{material}, {thickness:g} mm")
+    from rich.console import Console
+    from rich.table import Table
+
     table = Table(title=f"{title}, {illuminant}, {observer} deg, read by {where}")
     table.add_column("quantity")
     table.add_column("value ± standard error", justify="right")

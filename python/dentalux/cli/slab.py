@@ -11,8 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from dentalux import limits
 from dentalux.output_paths import atomic_file, check_out_file
@@ -60,6 +58,9 @@ def write_profiles(path: Path, result, radial_max: float, angle_bins: int) -> No
 
 
 def print_result_table(result, title: str) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
     table = Table(title=title)
     table.add_column("quantity")
     table.add_column("value", justify="right")

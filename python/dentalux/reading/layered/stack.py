@@ -3,7 +3,9 @@ each spatial frequency: what the instrument's readings need, per band."""
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -71,13 +73,37 @@ def _optics(band_stacks, index: int, order: int):
     return mua, mus, chi
 
 
+@lru_cache(maxsize=16)
+def _frame(indices: tuple, per_interval, modes: int, cone_deg) -> tuple:
+    """What :func:`response` needs of the refractive indices alone (medium above, layers,
+    medium below), the same for every chunk of bands: the nodes, the interfaces top to
+    bottom, and the weights of the flux into the cone and into the hemispheres above and
+    below (up to about 0.5 MB). Read-only: every chunk and thread shares them."""
+    nodes = make_nodes(list(indices), per_interval)
+    faces = tuple(ops.interface(n1, n2, nodes, modes) for n1, n2 in itertools.pairwise(indices))
+    n_above, n_below = indices[0], indices[-1]
+    flux_top = 2 * np.pi * nodes.weights(n_above) * nodes.mu(n_above)
+    flux_bot = 2 * np.pi * nodes.weights(n_below) * nodes.mu(n_below)
+    if cone_deg is None:
+        cone = flux_top
+    else:
+        lo, hi = np.radians(cone_deg)
+        cone = cone_weights(nodes.mu(n_above), np.cos(hi), np.cos(lo))
+        cone = cone / (np.sin(hi) ** 2 - np.sin(lo) ** 2)
+    for a in (flux_top, flux_bot, cone, *(m for f in faces for m in vars(f).values())):
+        a.flags.writeable = False
+    return nodes, faces, flux_top, flux_bot, cone
+
+
 def response(band_stacks, ks, n_above: float, n_below: float, cone_deg, modes: int,
              per_interval=NODES_PER_INTERVAL, order: int = ORDER) -> Response:
     """Solve one stack per band (slab ``Layer`` lists, top first, with the same indices and
     thicknesses in every band) at the spatial frequencies ``ks``, with ``modes`` modes."""
     first = band_stacks[0]
-    nodes = make_nodes([n_above] + [lay.n for lay in first] + [n_below], per_interval)
-    total = ops.interface(n_above, first[0].n, nodes, modes)
+    indices = (float(n_above), *(float(lay.n) for lay in first), float(n_below))
+    nodes, faces, flux_top, flux_bot, cone = _frame(
+        indices, per_interval, int(modes), None if cone_deg is None else tuple(cone_deg))
+    total = faces[0]
     ks = np.asarray(ks, float)
     prefix: tuple = ("stack", nodes.s.tobytes(), ks.tobytes(), int(modes), float(n_above))
     optics = [_optics(band_stacks, i, order) for i in range(len(first))]
@@ -88,30 +114,21 @@ def response(band_stacks, ks, n_above: float, n_below: float, cone_deg, modes: i
         prefix += (tuple(o.tobytes() for o in optics[i]), float(lay.thickness), float(lay.n),
                    float(n_next))
 
-        def extend(above=total, lay=lay, optics=optics[i], n_next=n_next):
+        def extend(above=total, lay=lay, optics=optics[i], face=faces[i + 1]):
             r, t = ops.layer(optics, lay.thickness, lay.n, nodes, ks, modes)
-            return ops.add(ops.add(above, ops.Element(r, t, r, t)),
-                           ops.interface(lay.n, n_next, nodes, modes))
+            return ops.add(ops.add(above, ops.Element(r, t, r, t)), face)
 
         total = ops.kept(prefix, extend)
     last = first[-1]
 
     def closing():
         r, t = ops.layer(optics[-1], last.thickness, last.n, nodes, ks, modes)
-        return ops.add(ops.Element(r, t, r, t), ops.interface(last.n, n_below, nodes, modes))
+        return ops.add(ops.Element(r, t, r, t), faces[-1])
 
     bottom = ops.kept(("last", nodes.s.tobytes(), ks.tobytes(), int(modes),
                        tuple(o.tobytes() for o in optics[-1]), float(last.thickness),
                        float(last.n), float(n_below)), closing)
     top, bot = nodes.count(n_above), nodes.count(n_below)
-    flux_top = 2 * np.pi * nodes.weights(n_above) * nodes.mu(n_above)
-    flux_bot = 2 * np.pi * nodes.weights(n_below) * nodes.mu(n_below)
-    if cone_deg is None:
-        cone = flux_top
-    else:
-        lo, hi = np.radians(cone_deg)
-        cone = cone_weights(nodes.mu(n_above), np.cos(hi), np.cos(lo))
-        cone = cone / (np.sin(hi) ** 2 - np.sin(lo) ** 2)
     # the beam in the normal node (node 0) from above, a Lambertian exitance from below
     rd, td, ru, tu = ops.join(total, bottom, 0, bot)
     up = rd[..., :top] / flux_top[0]                  # unit irradiance in the normal node
