@@ -320,11 +320,8 @@ struct Lanes {
     first: F,
     fd: F,
     g: F,
-    // this photon's tallies
+    // this photon's tallies so far (its exit is read off its state when it ends)
     spec: D,
-    diff_r: D,
-    unsc_t: D,
-    diff_t: D,
     abs: D,
     /// Absorption per layer, summed over the lane's photons (no per-photon spread needed).
     abs_layer: [D; MAX_LAYERS],
@@ -378,9 +375,6 @@ fn walk(
         fd: [l0.fd; LANES],
         g: [l0.g; LANES],
         spec: zero_d,
-        diff_r: zero_d,
-        unsc_t: zero_d,
-        diff_t: zero_d,
         abs: zero_d,
         abs_layer: [zero_d; MAX_LAYERS],
         sum: [zero_d; 7],
@@ -443,16 +437,25 @@ fn refill(
     if ended.iter().all(|&e| e == 0.0) {
         return launched;
     }
-    // close: TOT_R = SPEC + DIFF_R, TOT_T = UNSC_T + DIFF_T (as the scalar walk tallies)
+    // close. A photon ends by leaving with its weight w (at the top face, z = 0: diffuse
+    // reflection; at the bottom: diffuse or unscattered transmission) or absorbed by the
+    // roulette with w = 0, so its exit is read off its state; TOT_R = SPEC + DIFF_R,
+    // TOT_T = UNSC_T + DIFF_T (as the scalar walk tallies)
     for i in 0..LANES {
         let on = f64::from(ended[i] * s.active[i]);
+        let w = s.w[i];
+        let up = s.z[i] <= 0.0;
+        let scattered = s.scattered[i] != 0.0;
+        let diff_r = if up { w } else { 0.0 };
+        let unsc_t = if !up && !scattered { w } else { 0.0 };
+        let diff_t = if !up && scattered { w } else { 0.0 };
         let v = [
             s.spec[i],
-            s.diff_r[i],
-            s.spec[i] + s.diff_r[i],
-            s.unsc_t[i],
-            s.diff_t[i],
-            s.unsc_t[i] + s.diff_t[i],
+            diff_r,
+            s.spec[i] + diff_r,
+            unsc_t,
+            diff_t,
+            unsc_t + diff_t,
             s.abs[i],
         ];
         for k in 0..7 {
@@ -521,9 +524,6 @@ fn refill(
         } else {
             s.spec[i]
         };
-        s.diff_r[i] = if e { 0.0 } else { s.diff_r[i] };
-        s.unsc_t[i] = if e { 0.0 } else { s.unsc_t[i] };
-        s.diff_t[i] = if e { 0.0 } else { s.diff_t[i] };
         s.abs[i] = if e { 0.0 } else { s.abs[i] };
     }
     if plan.n_layers > 1 {
@@ -667,11 +667,6 @@ fn step(plan: &Plan, s: &mut Lanes, r: &mut LaneRng, ended: &mut F) {
         } else {
             s.roulette[i]
         };
-        let wl = if leaves[i] { w } else { 0.0 };
-        let scattered = s.scattered[i] != 0.0;
-        s.diff_r[i] += if down[i] { 0.0 } else { wl };
-        s.diff_t[i] += if down[i] && scattered { wl } else { 0.0 };
-        s.unsc_t[i] += if down[i] && !scattered { wl } else { 0.0 };
         s.scattered[i] = if interacts[i] { 1.0 } else { s.scattered[i] };
         s.events[i] += u32::from(s.active[i] != 0.0);
         // (a lane the refill ended at its entry stays ended)
