@@ -466,16 +466,15 @@ pub fn simulate_with(cfg: &SlabConfig, control: &Control, lanes: bool) -> Result
             let mut tally = Tally::new(cfg);
             if let Some(plan) = &plan {
                 lanes::run_batch(plan, &mut rng, count, &mut tally, control)?;
-                control.add_done(count);
-                return Ok(tally);
-            }
-            let mut photon = [0.0; N_TALLIES];
-            for _ in 0..count {
-                photon.fill(0.0);
-                tracer.trace(&mut rng, &mut photon, &mut tally, control)?;
-                for (k, x) in photon.iter().enumerate() {
-                    tally.sum[k] += x;
-                    tally.sumsq[k] += x * x;
+            } else {
+                let mut photon = [0.0; N_TALLIES];
+                for _ in 0..count {
+                    photon.fill(0.0);
+                    tracer.trace(&mut rng, &mut photon, &mut tally, control)?;
+                    for (k, x) in photon.iter().enumerate() {
+                        tally.sum[k] += x;
+                        tally.sumsq[k] += x * x;
+                    }
                 }
             }
             control.add_done(count);

@@ -158,7 +158,7 @@ impl pulp::WithSimd for Batch<'_> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) -> Result<()> {
-        walk(self.plan, self.rng, self.count, self.tally, self.control)
+        walk(self)
     }
 }
 
@@ -294,6 +294,7 @@ fn fresnel(ci: f32, k: f32) -> (f32, f32) {
 
 /// The lanes' photons: state, the constants of the layer each is in, and what each photon
 /// has tallied so far (f64).
+#[derive(Default)]
 struct Lanes {
     z: F,
     uz: F,
@@ -339,47 +340,25 @@ fn launch(plan: &Plan, cos_above: f64) -> (f64, f64, f32) {
 }
 
 #[inline(always)]
-fn walk(
-    plan: &Plan,
-    rng: &mut Stream,
-    count: u64,
-    tally: &mut Tally,
-    control: &Control,
-) -> Result<()> {
+fn walk(batch: Batch<'_>) -> Result<()> {
+    let Batch {
+        plan,
+        rng,
+        count,
+        tally,
+        control,
+    } = batch;
     let mut r = LaneRng::new(rng);
-    let l0 = plan.layers[0];
     let fixed = match plan.incidence {
         Incidence::Normal => Some(launch(plan, 1.0)),
         Incidence::Angle(theta) => Some(launch(plan, theta.cos())),
         Incidence::Diffuse => None,
     };
-    let zero_d = [0.0f64; LANES];
-    let mut s = Lanes {
-        z: [0.0; LANES],
-        uz: [0.0; LANES],
-        w: [0.0; LANES],
-        layer: [0; LANES],
-        scattered: [0.0; LANES],
-        roulette: [0.0; LANES],
-        active: [0.0; LANES],
-        events: [0; LANES],
-        mfp: [l0.mfp; LANES],
-        albedo: [l0.albedo; LANES],
-        albedo32: [l0.albedo as f32; LANES],
-        z_top: [l0.z_top; LANES],
-        z_bot: [l0.z_bot; LANES],
-        ratio_below: [l0.ratio_below; LANES],
-        ratio_above: [l0.ratio_above; LANES],
-        last: [if l0.last { 1.0 } else { 0.0 }; LANES],
-        first: [1.0; LANES],
-        fd: [l0.fd; LANES],
-        g: [l0.g; LANES],
-        spec: zero_d,
-        abs: zero_d,
-        abs_layer: [zero_d; MAX_LAYERS],
-        sum: [zero_d; 7],
-        sumsq: [zero_d; 7],
-    };
+    // every lane in the top layer, idle, nothing tallied
+    let mut s = Lanes::default();
+    for i in 0..LANES {
+        set_layer(&mut s, i, &plan.layers[0]);
+    }
     // every lane starts "ended" with nothing tallied, so the first pass of `refill` launches
     let mut ended = [1.0f32; LANES];
     let mut launched: u64 = 0;
