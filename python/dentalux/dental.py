@@ -40,7 +40,7 @@ the ``infinite`` geometry's independent runs, by adding their variances.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import NamedTuple
 
@@ -315,16 +315,11 @@ def read(specimen, bands=DEFAULT_BANDS, instrument=None, backing_black=None, bac
     rec = Reconstruction(wl, grid=cs.wavelengths, basis=reconstruction)
     spectra = reading.measure(reading.stacks(parts, wl), wl, inst, rb_black, rb_white,
                               photons, seed, estimator, threads, progress, walks, solver)
-
-    def metrics_of(batch):
-        return colour_of(batch, cs, rec, op_backing)
-
-    out, errs = spectra.propagate(metrics_of)
+    out, errs, alone = spectra.propagate_parts(lambda b: colour_of(b, cs, rec, op_backing))
     stderr = _flat_stderr(errs)
     # the replicates' part alone, where a rim walk's zero count bounds the rest: the two
     # fall differently with photons (_precision_plan)
-    replicate_stderr = (_flat_stderr(replace(spectra, rim_bounds=()).propagate(metrics_of)[1])
-                        if spectra.rim_bounds else {})
+    replicate_stderr = _flat_stderr(alone) if spectra.rim_bounds else {}
     names = reading.CHANNELS
     spectra_out = {
         **{k: spectra.values[i] for i, k in enumerate(names)},

@@ -31,6 +31,7 @@ from threadpoolctl import threadpool_limits
 
 from dentalux import _core, limits
 from dentalux.progress import bar
+from dentalux.reading.layered.quadrature import cone_fraction
 from dentalux.reading.spectra import ReadSpectra, RimBound, replicate_variance, with_bounds
 from dentalux.slab import Layer, parse_incidence, simulate
 
@@ -201,13 +202,10 @@ def rim_event_bound(inst, rb_black, rb_white, survival: float) -> np.ndarray:
     (channels × bands): its weight (1 at launch, never more but through the backing's
     survival roulette, which the backing's reflectance R_b undoes order by order, (R_b /
     survival)^k at order k) times what the window counts it (1 / the detector cone's
-    Lambertian fraction, as the core's Window::cone_fraction; the transmitted light has no
-    cone), over the reading's white normaliser."""
+    Lambertian fraction; the transmitted light has no cone), over the reading's white
+    normaliser."""
     cone = inst.spec.cone_deg
-    gain = 1.0
-    if cone:
-        lo, hi = np.radians(cone)
-        gain = 1.0 / (np.sin(hi) ** 2 - np.sin(lo) ** 2)
+    gain = 1.0 / cone_fraction(cone) if cone else 1.0
 
     def roulette(rb):
         return np.maximum(1.0, np.asarray(rb, dtype=float) / survival) ** MAX_ORDER

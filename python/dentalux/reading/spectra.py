@@ -126,6 +126,11 @@ class ReadSpectra:
         """``fn`` of the spectra (a batch (..., channels, bands) -> dict of arrays (...) or
         (..., 3)) at the estimate, and the standard error of each of its outputs (first
         order, with every correlation the replicates carry)."""
+        return self.propagate_parts(fn)[:2]
+
+    def propagate_parts(self, fn: Callable[[np.ndarray], dict]) -> tuple[dict, dict, dict]:
+        """:meth:`propagate`, and the standard errors from the replicates alone (without the
+        rim walks' bounds; the same where there are none), from one evaluation of ``fn``."""
         if self.replicates is not None:
             base = self.values
             n_in = base.size
@@ -134,15 +139,16 @@ class ReadSpectra:
             out = fn(batch)
             dev = (self.replicates - base).reshape(len(self.replicates), -1)  # (R, n_in)
             w = self.replicate_weights
-            stderr = {}
+            stderr, alone = {}, {}
             for key, value in out.items():
                 grad = (value[1:] - value[0]) / STEP  # (n_in,) or (n_in, 3)
                 z = np.tensordot(dev, grad, axes=([1], [0]))  # (R,) or (R, 3)
                 var = replicate_variance(w, z)
+                alone[key] = np.sqrt(var)
                 for rb in self.rim_bounds:  # independent walks: their variances add
                     var = var + rb.variance(grad)
                 stderr[key] = np.sqrt(var)
-            return {k: v[0] for k, v in out.items()}, stderr
+            return {k: v[0] for k, v in out.items()}, stderr, alone
         base = self.inputs
         n_in = base.size
         batch = np.broadcast_to(base, (1 + n_in,) + base.shape).copy()
@@ -153,4 +159,4 @@ class ReadSpectra:
         for key, value in out.items():
             grad = (value[1:] - value[0]) / STEP
             stderr[key] = np.sqrt(np.tensordot(sig**2, grad**2, axes=([0], [0])))
-        return {k: v[0] for k, v in out.items()}, stderr
+        return {k: v[0] for k, v in out.items()}, stderr, stderr

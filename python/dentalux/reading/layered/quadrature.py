@@ -82,6 +82,13 @@ def make_nodes(indices, per_interval) -> Nodes:
     return Nodes(s=s[order], etendue=e[order])
 
 
+def cone_fraction(cone_deg) -> float:
+    """The Lambertian fraction of the detector cone (lo, hi) [deg]: sin²(hi) − sin²(lo), as
+    the core's Window::cone_fraction."""
+    lo, hi = np.radians(cone_deg)
+    return np.sin(hi) ** 2 - np.sin(lo) ** 2
+
+
 def cone_weights(mu: np.ndarray, mu_lo: float, mu_hi: float) -> np.ndarray:
     """Weights c with sum_j c_j L_j = the flux into the cone mu_lo..mu_hi of a radiance L
     given at the nodes ``mu`` of the medium above: L interpolated through the oblique nodes

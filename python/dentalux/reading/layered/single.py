@@ -17,6 +17,7 @@ from scipy.special import eval_legendre, j0
 
 from dentalux import _core
 from dentalux.reading.layered.operators import legendre_moments
+from dentalux.reading.layered.quadrature import cone_fraction
 
 # Gauss points over each layer's depth and over the cone's cosines
 DEPTH_POINTS = 48
@@ -37,7 +38,7 @@ def correction(band_stacks, ks, n_above: float, cone_deg, order: int) -> np.ndar
     s = n_above * np.sqrt(1 - mu_a**2)
     zx, zw = np.polynomial.legendre.leggauss(DEPTH_POINTS)
     ks = np.asarray(ks, float)
-    frac = np.sin(hi) ** 2 - np.sin(lo) ** 2
+    frac = cone_fraction(cone_deg)
     out = np.zeros((len(band_stacks), len(ks)))
     for b, stack in enumerate(band_stacks):
         n = [lay.n for lay in stack]

@@ -11,7 +11,7 @@ import numpy as np
 
 from dentalux.reading.layered import operators as ops
 from dentalux.reading.layered import single
-from dentalux.reading.layered.quadrature import cone_weights, make_nodes
+from dentalux.reading.layered.quadrature import cone_fraction, cone_weights, make_nodes
 
 #: quadrature nodes between consecutive refractive indices: 8 where light can leave into the
 #: medium above (what the detector sees), 6 where it is trapped by total internal reflection
@@ -89,7 +89,7 @@ def _frame(indices: tuple, per_interval, modes: int, cone_deg) -> tuple:
     else:
         lo, hi = np.radians(cone_deg)
         cone = cone_weights(nodes.mu(n_above), np.cos(hi), np.cos(lo))
-        cone = cone / (np.sin(hi) ** 2 - np.sin(lo) ** 2)
+        cone = cone / cone_fraction(cone_deg)
     for a in (flux_top, flux_bot, cone, *(m for f in faces for m in vars(f).values())):
         a.flags.writeable = False
     return nodes, faces, flux_top, flux_bot, cone
