@@ -3,11 +3,11 @@
 //!
 //! ```text
 //! cargo build --release --example slab_profile
-//! valgrind --tool=callgrind target/release/examples/slab_profile dentin analog 20000
+//! valgrind --tool=callgrind target/release/examples/slab_profile dentin analog 20000 [threads]
 //! ```
 //!
 //! Cases: `classic` (μa 1, μs 9, g 0.75, n 1, d 0.2 mm) and `dentin` (μa 0.04, μs 26,
-//! g 0.9, n 1.54, d 2 mm). Runs on one thread and prints the totals with their standard errors and photons per second.
+//! g 0.9, n 1.54, d 2 mm). Runs on one thread (or the count given after the photons) and prints the totals with their standard errors and photons per second.
 
 use dentalux_core::control::Control;
 use dentalux_core::integrators::slab::{
@@ -25,6 +25,7 @@ fn main() {
         _ => Estimator::Analog,
     };
     let photons: u64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(100_000);
+    let threads: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(1);
     let (mua, mus, g, n, d) = match case {
         "dentin" => (0.04, 26.0, 0.9, 1.54, 2.0),
         _ => (1.0, 9.0, 0.75, 1.0, 0.2),
@@ -48,7 +49,7 @@ fn main() {
         backing_orders: None,
     };
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
+        .num_threads(threads)
         .build()
         .expect("thread pool");
     let start = Instant::now();

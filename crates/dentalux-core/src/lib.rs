@@ -3,8 +3,9 @@
 //! Crate map (lower layers first):
 //! - [`math`], [`rng`], [`sampling`]: vectors and frames, deterministic random streams and
 //!   their tags, warps from uniforms to distributions.
-//! - [`error`], [`control`]: input errors that name the field and its allowed range;
-//!   cancellation and progress shared with the caller.
+//! - [`error`], [`control`], [`batches`]: input errors that name the field and its allowed
+//!   range; cancellation and progress shared with the caller; a run's batches on the thread
+//!   pool.
 //! - [`phase`]: phase functions of the paper (eqs. 7–10).
 //! - [`fresnel`]: smooth dielectric interfaces (unpolarised Fresnel, refraction, TIR).
 //! - [`medium`]: one homogeneous participating medium for one band (eqs. 1–6).
@@ -28,6 +29,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod batches;
 pub mod camera;
 pub mod contract;
 pub mod control;

@@ -7,7 +7,8 @@ use dentalux_core::Error;
 use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::time::{Duration, Instant};
+use std::sync::{Condvar, Mutex, PoisonError};
+use std::time::Duration;
 
 /// Map a core error to the Python exception a user expects.
 pub fn to_py_err(e: Error) -> PyErr {
@@ -40,15 +41,23 @@ where
         .map_err(|e| PyRuntimeError::new_err(format!("cannot start threads: {e}")))?;
     let control = Control::new();
     let mut py_error: Option<PyErr> = None;
+    // the worker says when it ends, so that the end is seen at once (not at the next poll)
+    // and the waiting thread sleeps between its checks instead of waking the CPUs
+    let ended = (Mutex::new(false), Condvar::new());
     let outcome = std::thread::scope(|s| {
-        let handle = s.spawn(|| catch_unwind(AssertUnwindSafe(|| pool.install(|| work(&control)))));
+        let handle = s.spawn(|| {
+            let out = catch_unwind(AssertUnwindSafe(|| pool.install(|| work(&control))));
+            *ended.0.lock().unwrap_or_else(PoisonError::into_inner) = true;
+            ended.1.notify_all();
+            out
+        });
         loop {
             let finished = py.allow_threads(|| {
-                let start = Instant::now();
-                while !handle.is_finished() && start.elapsed() < Duration::from_millis(100) {
-                    std::thread::sleep(Duration::from_millis(2));
-                }
-                handle.is_finished()
+                let done = ended.0.lock().unwrap_or_else(PoisonError::into_inner);
+                let wait = ended
+                    .1
+                    .wait_timeout_while(done, Duration::from_millis(100), |d| !*d);
+                *wait.unwrap_or_else(PoisonError::into_inner).0
             });
             if finished {
                 break;

@@ -28,6 +28,7 @@
 //! sampled disc point instead of sin/cos (its normalisation folded into the rotation's
 //! division), and a single-lobe phase function draws one uniform per scattering.
 
+use crate::batches;
 use crate::control::Control;
 use crate::error::{check_positive, check_range, Error, Result};
 use crate::fresnel::reflectance_and_cos_t;
@@ -456,31 +457,28 @@ pub fn simulate_with(cfg: &SlabConfig, control: &Control, lanes: bool) -> Result
     let n_batches = cfg.n_photons.div_ceil(batch);
     let tracer = Tracer::new(cfg);
     let plan = if lanes { lanes::Plan::new(cfg) } else { None };
-    // collecting into a Result stops handing out batches after the first error
-    let tallies: Result<Vec<Tally>> = (0..n_batches)
-        .into_par_iter()
-        .map(|b| {
-            control.check()?;
-            let count = batch.min(cfg.n_photons - b * batch);
-            let mut rng = Stream::new(cfg.seed, cfg.band, b);
-            let mut tally = Tally::new(cfg);
-            if let Some(plan) = &plan {
-                lanes::run_batch(plan, &mut rng, count, &mut tally, control)?;
-            } else {
-                let mut photon = [0.0; N_TALLIES];
-                for _ in 0..count {
-                    photon.fill(0.0);
-                    tracer.trace(&mut rng, &mut photon, &mut tally, control)?;
-                    for (k, x) in photon.iter().enumerate() {
-                        tally.sum[k] += x;
-                        tally.sumsq[k] += x * x;
-                    }
+    // batches taken one at a time by each thread, results in batch order (crate::batches)
+    let tallies: Result<Vec<Tally>> = batches::in_order(n_batches, |b| {
+        control.check()?;
+        let count = batch.min(cfg.n_photons - b * batch);
+        let mut rng = Stream::new(cfg.seed, cfg.band, b);
+        let mut tally = Tally::new(cfg);
+        if let Some(plan) = &plan {
+            lanes::run_batch(plan, &mut rng, count, &mut tally, control)?;
+        } else {
+            let mut photon = [0.0; N_TALLIES];
+            for _ in 0..count {
+                photon.fill(0.0);
+                tracer.trace(&mut rng, &mut photon, &mut tally, control)?;
+                for (k, x) in photon.iter().enumerate() {
+                    tally.sum[k] += x;
+                    tally.sumsq[k] += x * x;
                 }
             }
-            control.add_done(count);
-            Ok(tally)
-        })
-        .collect();
+        }
+        control.add_done(count);
+        Ok(tally)
+    });
     let tallies = tallies?;
     let mut total = Tally::new(cfg);
     for t in &tallies {

@@ -30,6 +30,7 @@ use super::slab::{
     batch_size, count_event, distance_to_faces, entry_point, lambertian_up_into, BackingOrders,
     Incidence, SlabLayer, MAX_BACKING_BOUNCES, REPLICATES,
 };
+use crate::batches;
 use crate::control::Control;
 use crate::error::{check_range, Error, Result};
 use crate::fresnel::reflectance_and_cos_t;
@@ -38,7 +39,6 @@ use crate::math::{rotate_direction_scaled, Vec3};
 use crate::phase::PhaseFunction;
 use crate::rng::Stream;
 use crate::sampling::sample_azimuth_scaled_bits;
-use rayon::prelude::*;
 
 /// Largest band weight below which a walk continues by Russian roulette (survival
 /// probability its ratio to this, weights divided by it).
@@ -526,26 +526,22 @@ pub fn simulate_spectral(cfg: &SpectralConfig, control: &Control) -> Result<Spec
     let batch = batch_size(cfg.n_photons);
     let n_batches = cfg.n_photons.div_ceil(batch);
     type Batch = (Vec<f64>, Vec<f64>, f64);
-    let batches: Result<Vec<Batch>> = (0..n_batches)
-        .into_par_iter()
-        .map(|b| {
-            control.check()?;
-            let first = b * batch;
-            let count = batch.min(cfg.n_photons - first);
-            let mut rng = Stream::new(cfg.seed, cfg.key, b);
-            let mut rec = tracer.record();
-            let mut sums = vec![0.0; width];
-            let mut truncated = vec![0.0; n_bands];
-            let mut conc = 0.0;
-            for i in 0..count {
-                let hero = ((first + i) % n_bands as u64) as usize;
-                conc +=
-                    tracer.trace(&mut rng, hero, &mut rec, &mut sums, &mut truncated, control)?;
-            }
-            control.add_done(count);
-            Ok((sums, truncated, conc))
-        })
-        .collect();
+    let batches: Result<Vec<Batch>> = batches::in_order(n_batches, |b| {
+        control.check()?;
+        let first = b * batch;
+        let count = batch.min(cfg.n_photons - first);
+        let mut rng = Stream::new(cfg.seed, cfg.key, b);
+        let mut rec = tracer.record();
+        let mut sums = vec![0.0; width];
+        let mut truncated = vec![0.0; n_bands];
+        let mut conc = 0.0;
+        for i in 0..count {
+            let hero = ((first + i) % n_bands as u64) as usize;
+            conc += tracer.trace(&mut rng, hero, &mut rec, &mut sums, &mut truncated, control)?;
+        }
+        control.add_done(count);
+        Ok((sums, truncated, conc))
+    });
     let batches = batches?;
     let groups = (n_batches as usize).min(REPLICATES);
     let mut out = SpectralResult {
