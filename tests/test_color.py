@@ -121,12 +121,49 @@ def test_write_images(tmp_path):
         color.write_images(cube[..., :3], bands, tmp_path)
 
 
-def test_a_reading_does_not_load_colour_sciences_plotting():
-    # colour-science's __init__ imports its plotting (pyplot, fonts: about 0.5 s of every
-    # command line call); dentalux._lazy defers it until one of its attributes is read
+def test_a_reading_imports_neither_colour_science_nor_scipys_interpolation():
+    # a command-line reading paid about 0.3 s for colour-science's import and 0.25 s for
+    # scipy.interpolate's: the default colour systems' weights are tabulated, CIELAB, CIEDE2000
+    # and the two interpolations are written out (held to those libraries below). Where
+    # colour-science is used, its __init__'s plotting (pyplot, fonts) stays deferred until
+    # one of its attributes is read (dentalux._lazy)
     code = ("import sys; from dentalux import dental; "
             "dental.read([('enamel', 1.0)], bands=[450, 550, 650]); "
+            "loaded = [m for m in ('colour', 'scipy.interpolate') if m in sys.modules]; "
+            "assert not loaded, loaded; "
+            "from dentalux import color; color.XYZ_to_linear_srgb([0.2, 0.3, 0.4]); "
             "assert 'colour' in sys.modules and 'matplotlib.pyplot' not in sys.modules; "
             "import colour; assert callable(colour.plotting.plot_single_colour_swatch); "
             "assert 'matplotlib.pyplot' in sys.modules")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+@pytest.mark.parametrize("observer", ["2", "10"])
+def test_tabulated_weights_are_colour_sciences(observer):
+    """data/colour_weights.json holds what colour-science computes now, to the bit."""
+    kept = color.ColourSystem("D65", observer)
+    computed = color.ColourSystem("D65", observer, tabulated=False)
+    assert np.array_equal(kept.weights, computed.weights)
+    assert np.array_equal(kept.white_xy, computed.white_xy)
+    assert np.array_equal(kept.wavelengths, computed.wavelengths)
+
+
+def test_cielab_and_ciede2000_are_colour_sciences():
+    rng = np.random.default_rng(5)
+    xyz = rng.uniform(-0.01, 1.1, (4000, 3))
+    xyz[:1000] *= 0.01  # below (6/29)^3 of the white: the linear part
+    for white in (color.system("D65", "2").white_xy, colour.CCS_ILLUMINANTS[
+            "CIE 1931 2 Degree Standard Observer"]["A"]):
+        np.testing.assert_allclose(color.xyz_to_lab(xyz, white), colour.XYZ_to_Lab(xyz, white),
+                                   rtol=0, atol=1e-12)
+    lab1 = rng.uniform([0, -120, -120], [100, 120, 120], (4000, 3))
+    lab2 = lab1 + rng.normal(0, 5, lab1.shape)
+    lab1[:300, 1:] = 0       # neutral against coloured
+    lab2[300:600, 1:] = 0
+    lab2[600:900] = lab1[600:900]  # identical
+    lab2[900:1200, 1:] = -lab1[900:1200, 1:]  # hues 180 degrees apart
+    np.testing.assert_allclose(color.delta_e00(lab1, lab2),
+                               colour.difference.delta_E_CIE2000(lab1, lab2), rtol=0, atol=1e-12)
+    one = color.delta_e00(lab1[0], lab2[0])
+    assert np.ndim(one) == 0 and one == pytest.approx(
+        float(colour.difference.delta_E_CIE2000(lab1[0], lab2[0])), abs=1e-12)

@@ -1,7 +1,11 @@
 """Colorimetry: spectra [nm] -> CIE XYZ -> CIELAB, linear sRGB, display sRGB, CIEDE2000.
 
-All colour data (CMFs, illuminant SPDs, sRGB primaries, the sRGB transfer function,
-CIEDE2000) come from colour-science; this module only chooses the conventions:
+All colour data (CMFs, illuminant SPDs, sRGB primaries, the sRGB transfer function) come
+from colour-science; this module only chooses the conventions. A reading's path does not
+import colour-science (about 0.3 s of every command-line reading): the integration weights
+of the default systems are kept in ``data/colour_weights.json`` (derived from
+colour-science's data by ``data/make_colour_weights.py``), and CIELAB and CIEDE2000 are
+written out here; tests/test_color.py holds all three to colour-science's own results.
 
 - **Grid.** Spectra are integrated on a regular grid, 380-780 nm every 5 nm by default. CIE
   D65 in colour-science stops at 780 nm, so the grid never goes past 780 nm (the CMFs above
@@ -20,6 +24,7 @@ CIEDE2000) come from colour-science; this module only chooses the conventions:
 
 from __future__ import annotations
 
+import json
 from functools import lru_cache
 from pathlib import Path
 
@@ -60,35 +65,44 @@ class ColourSystem:
     """Spectra on a fixed grid -> XYZ (Y = 1 for rho = 1) for one illuminant and observer.
 
     ``grid = (start, end, step)`` in nm; the illuminant must cover it (D65: 300-780 nm).
+    ``tabulated``: take the weights from ``data/colour_weights.json`` where it has this
+    system (what colour-science computes, kept so that a reading need not import it);
+    otherwise colour-science computes them.
     """
 
-    def __init__(self, illuminant: str = "D65", observer: str = "2", grid=GRID):
+    def __init__(self, illuminant: str = "D65", observer: str = "2", grid=GRID,
+                 tabulated: bool = True):
         start, end, step = (float(x) for x in grid)
         if not (step > 0 and end > start):
             raise ValueError(f"grid = {grid!r}: need start < end and step > 0 [nm]")
         self.illuminant = illuminant
         self.observer = _observer_name(observer)
-        sd = _illuminant_sd(illuminant)
+        self.wavelengths = np.arange(round((end - start) / step) + 1) * step + start
+        table = _tabulated().get((illuminant, self.observer, (start, end, step))) \
+            if tabulated else None
+        if table is not None:
+            self.weights, self.white_xy = table
+        else:
+            self.weights, self.white_xy = self._computed(start, end, step)
+        self.white_XYZ = self.weights.sum(axis=1)
+
+    def _computed(self, start: float, end: float, step: float):
+        """The weights and the white's chromaticity by colour-science: its integration of
+        unit spectra, scaled so that rho = 1 gives Y = 1."""
+        sd = _illuminant_sd(self.illuminant)
         if start < sd.wavelengths[0] or end > sd.wavelengths[-1]:
             raise ValueError(
-                f"grid = {grid!r}: illuminant {illuminant} covers only "
+                f"grid = {(start, end, step)!r}: illuminant {self.illuminant} covers only "
                 f"{sd.wavelengths[0]:.0f}-{sd.wavelengths[-1]:.0f} nm"
             )
-        self.shape = colour.SpectralShape(start, end, step)
-        self.wavelengths = np.asarray(self.shape.wavelengths, dtype=float)
-        self.cmfs = colour.MSDS_CMFS[self.observer].copy().align(self.shape)
-        self.illuminant_sd = sd.align(self.shape)
-        # the 3 x n weights of the integration, computed by colour-science on unit vectors
-        eye = np.eye(len(self.wavelengths))
-        self.weights = self._integrate(eye).T / 100.0  # (3, n), rho = 1 -> Y = 1
-        self.white_XYZ = self.weights.sum(axis=1)
-        self.white_xy = colour.XYZ_to_xy(self.white_XYZ)
-
-    def _integrate(self, values: np.ndarray) -> np.ndarray:
-        return colour.msds_to_XYZ(
-            values, cmfs=self.cmfs, illuminant=self.illuminant_sd, method="Integration",
-            shape=self.shape,
-        )
+        shape = colour.SpectralShape(start, end, step)
+        if not np.array_equal(np.asarray(shape.wavelengths, float), self.wavelengths):
+            raise ValueError(f"grid = {(start, end, step)!r}: the step does not divide it")
+        weights = colour.msds_to_XYZ(
+            np.eye(len(self.wavelengths)), cmfs=colour.MSDS_CMFS[self.observer].copy()
+            .align(shape), illuminant=sd.align(shape), method="Integration", shape=shape,
+        ).T / 100.0  # (3, n)
+        return weights, colour.XYZ_to_xy(weights.sum(axis=1))
 
     def grid_to_XYZ(self, values: np.ndarray) -> np.ndarray:
         """Spectra on this grid, shape (..., n) -> XYZ (..., 3) with Y = 1 for rho = 1."""
@@ -101,7 +115,7 @@ class ColourSystem:
 
     def XYZ_to_Lab(self, XYZ: np.ndarray) -> np.ndarray:
         """CIELAB with this system's computed white (L* in [0, 100])."""
-        return colour.XYZ_to_Lab(np.asarray(XYZ, dtype=float), self.white_xy)
+        return xyz_to_lab(XYZ, self.white_xy)
 
     def spectrum_to_XYZ(self, values, wavelengths_nm, reconstruction=None) -> np.ndarray:
         """Band values (..., bands) at ``wavelengths_nm`` -> XYZ (..., 3).
@@ -149,9 +163,68 @@ def spectrum_to_Lab(values, wavelengths_nm, illuminant="D65", observer="2",
                                                              reconstruction)
 
 
+def xyz_to_lab(XYZ, white_xy) -> np.ndarray:
+    """CIE 1976 L*a*b* (CIE 015:2018, eqs. 8.1-8.3) of XYZ (..., 3) on the Y = 1 scale,
+    against the white of chromaticity ``white_xy`` at Y = 1. Written out (as colour-science's
+    XYZ_to_Lab computes it, which the tests hold it to) so that a reading need not import
+    colour-science."""
+    x, y = (float(v) for v in white_xy)
+    per_y = 1.0 / y
+    t = np.asarray(XYZ, float) / np.array([x * per_y, 1.0, (1.0 - (x + y)) * per_y])
+    # the cube root above (6/29)^3, its tangent line through 4/29 below
+    f = np.where(t > (24 / 116) ** 3, np.abs(t) ** (1 / 3), (841 / 108) * t + 16 / 116)
+    fx, fy, fz = np.moveaxis(f, -1, 0)
+    return np.stack([116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz)], axis=-1)
+
+
 def delta_e00(lab1, lab2) -> np.ndarray:
-    """CIEDE2000 colour difference (kL = kC = kH = 1), colour-science's implementation."""
-    return colour.difference.delta_E_CIE2000(np.asarray(lab1, float), np.asarray(lab2, float))
+    """CIEDE2000 colour difference (kL = kC = kH = 1; CIE 142:2001, in the notation of
+    Sharma, Wu & Dalal 2005, Color Res Appl 30:21, eqs. 1-22) between CIELAB colours
+    (..., 3). Written out so that a reading need not import colour-science; the tests hold
+    it to Sharma's published pairs and to colour-science's implementation."""
+    L1, a1, b1 = np.moveaxis(np.asarray(lab1, float), -1, 0)
+    L2, a2, b2 = np.moveaxis(np.asarray(lab2, float), -1, 0)
+    # a* stretched by G (eqs. 2-4), so that near-neutral colours weigh hue less
+    c7 = ((np.hypot(a1, b1) + np.hypot(a2, b2)) / 2) ** 7
+    g = 0.5 * (1 - np.sqrt(c7 / (c7 + 25.0 ** 7)))
+    a1, a2 = a1 * (1 + g), a2 * (1 + g)
+    c1, c2 = np.hypot(a1, b1), np.hypot(a2, b2)
+    h1 = np.degrees(np.arctan2(b1, a1)) % 360
+    h2 = np.degrees(np.arctan2(b2, a2)) % 360
+    # differences (eqs. 8-11): the hue angle's the short way round, none without chroma
+    chromatic = c1 * c2 != 0
+    dh = h2 - h1
+    dh = np.where(dh > 180, dh - 360, np.where(dh < -180, dh + 360, dh))
+    dh = np.where(chromatic, dh, 0.0)
+    d_l, d_c = L2 - L1, c2 - c1
+    d_h = 2 * np.sqrt(c1 * c2) * np.sin(np.radians(dh / 2))
+    # means (eqs. 12-14): the hue's the short way round, the sum without chroma
+    l_m, c_m = (L1 + L2) / 2, (c1 + c2) / 2
+    h_sum = h1 + h2
+    h_m = np.where(np.abs(h1 - h2) <= 180, h_sum / 2,
+                   np.where(h_sum < 360, (h_sum + 360) / 2, (h_sum - 360) / 2))
+    h_m = np.where(chromatic, h_m, h_sum)
+    # weights (eqs. 15-22)
+    t = (1 - 0.17 * np.cos(np.radians(h_m - 30)) + 0.24 * np.cos(np.radians(2 * h_m))
+         + 0.32 * np.cos(np.radians(3 * h_m + 6)) - 0.20 * np.cos(np.radians(4 * h_m - 63)))
+    rotation = 30 * np.exp(-(((h_m - 275) / 25) ** 2))
+    r_c = 2 * np.sqrt(c_m ** 7 / (c_m ** 7 + 25.0 ** 7))
+    s_l = 1 + 0.015 * (l_m - 50) ** 2 / np.sqrt(20 + (l_m - 50) ** 2)
+    s_c = 1 + 0.045 * c_m
+    s_h = 1 + 0.015 * c_m * t
+    r_t = -np.sin(np.radians(2 * rotation)) * r_c
+    dl, dc, dhh = d_l / s_l, d_c / s_c, d_h / s_h
+    out = np.sqrt(dl ** 2 + dc ** 2 + dhh ** 2 + r_t * dc * dhh)
+    return out[()] if out.ndim == 0 else out
+
+
+@lru_cache(maxsize=1)
+def _tabulated() -> dict:
+    """data/colour_weights.json by (illuminant, observer name, grid): (weights, white xy)."""
+    doc = json.loads((Path(__file__).parent / "data" / "colour_weights.json").read_text())
+    return {(e["illuminant"], e["observer"], tuple(map(float, e["grid"]))):
+            (np.array(e["weights"], float), np.array(e["white_xy"], float))
+            for e in doc["systems"]}
 
 
 def delta_e00_scale(lab, lab_stderr, step: float = 0.01) -> float:

@@ -24,7 +24,6 @@ measures.
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import make_interp_spline
 
 from dentalux import reading
 from dentalux.color import delta_e00
@@ -58,6 +57,10 @@ def axis_weights(nodes: np.ndarray, t) -> np.ndarray:
     n = len(nodes)
     if n == 1:
         return np.ones((t.size, 1))
+    # deferred: scipy's interpolation takes 0.25 s to import, which every command-line reading
+    # would pay through the layer parsing in this package
+    from scipy.interpolate import make_interp_spline
+
     k = min(3, n - 1)
     spline = make_interp_spline(np.log(nodes), np.eye(n), k=k)
     return np.asarray(spline(np.log(np.clip(t, nodes[0], nodes[-1]))))

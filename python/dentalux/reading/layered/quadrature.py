@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dentalux.reading.layered import interpolate
+
 
 def _gauss(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Gauss-Legendre nodes and weights on [0, 1]."""
@@ -93,9 +95,7 @@ def cone_weights(mu: np.ndarray, mu_lo: float, mu_hi: float) -> np.ndarray:
     """Weights c with sum_j c_j L_j = the flux into the cone mu_lo..mu_hi of a radiance L
     given at the nodes ``mu`` of the medium above: L interpolated through the oblique nodes
     (the normal node also holds the beam's specular reflections, a delta)."""
-    from scipy.interpolate import BarycentricInterpolator
-
     x, w = np.polynomial.legendre.leggauss(32)
     pts = mu_lo + (x + 1) / 2 * (mu_hi - mu_lo)
-    basis = BarycentricInterpolator(mu[1:], np.eye(len(mu) - 1))(pts)  # (points, nodes)
+    basis = interpolate.polynomial(mu[1:], pts)  # (points, nodes)
     return 2 * np.pi * np.concatenate([[0.0], (w * (mu_hi - mu_lo) / 2 * pts) @ basis])

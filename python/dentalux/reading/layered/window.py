@@ -24,9 +24,9 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 from scipy.special import j0, j1
 
+from dentalux.reading.layered import interpolate
 from dentalux.reading.layered.stack import K_NODES, Response
 
 # the k integral: the kernel oscillates with period 2 pi / (largest radius, plus the pair's
@@ -106,8 +106,8 @@ def _weights(ks: tuple, pairs: tuple) -> tuple[np.ndarray, np.ndarray, float]:
         / FINE_PER_PERIOD
     fine = np.arange(step / 2, k_last, step)
     far = np.arange(k_last + step / 2, TAIL_FACTOR * k_last, step)
-    basis = CubicSpline(np.arcsinh(np.asarray(ks) / K_SCALE), np.eye(len(ks)))(
-        np.arcsinh(fine / K_SCALE))                                 # (fine, nodes)
+    basis = interpolate.cubic_spline(np.arcsinh(np.asarray(ks) / K_SCALE),
+                                     np.arcsinh(fine / K_SCALE))    # (fine, nodes)
     near_kernel = pairs_kernel(fine, pairs) * step
     far_kernel = pairs_kernel(far, pairs) * step
     spline = near_kernel @ basis
