@@ -227,13 +227,17 @@ def colour_of(spectra, cs, rec, op_backing):
     xyz_b, xyz_w, xyz_t = (cs.grid_to_XYZ(rec(s)) for s in (r_b, r_w, tt))
     lab_b, lab_w, lab_t = (cs.XYZ_to_Lab(x) for x in (xyz_b, xyz_w, xyz_t))
     lab_r = lab_b if op_backing == "black" else lab_w
+    # a specimen that sends nothing back over white has no contrast ratio (0/0): left NaN,
+    # which the finite check after the metrics reports by name
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cr = xyz_b[..., 1] / xyz_w[..., 1]
     return {
         "lab_black": lab_b,
         "lab_white": lab_w,
         "lab_transmitted": lab_t,
         "tp": delta_e76(lab_b, lab_w),
         "tp00": delta_e00(lab_b, lab_w),
-        "cr": xyz_b[..., 1] / xyz_w[..., 1],
+        "cr": cr,
         "op": np.hypot(lab_t[..., 1] - lab_r[..., 1], lab_t[..., 2] - lab_r[..., 2]),
     }
 

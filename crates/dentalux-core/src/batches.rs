@@ -6,7 +6,7 @@
 //! slower (its CPU busy with something else) takes fewer. A parallel iterator's split gives
 //! each thread a fixed share up front and leaves the faster one idle at the end; split into
 //! single batches, its speed varied widely from run to run
-//! (docs/notes/2026-12-07-batch-schedule.md has the measurements).
+//! (docs/notes/2026-12-07-threads-and-start-up.md has the measurements).
 
 use crate::Result;
 use rayon::prelude::*;

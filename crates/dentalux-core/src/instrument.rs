@@ -123,7 +123,7 @@ impl Window {
     pub fn cone_fraction(&self) -> f64 {
         match self.cone {
             None => 1.0,
-            Some((lo, hi)) => hi.sin().powi(2) - lo.sin().powi(2),
+            Some((lo, hi)) => cone_fraction(lo, hi),
         }
     }
 
@@ -225,6 +225,12 @@ fn disc_overlap_fraction(a: f64, b: f64, d: f64) -> f64 {
     let k = ((-d + a + b) * (d + a - b) * (d - a + b) * (d + a + b)).max(0.0);
     let lens = a * a * ca.acos() + b * b * cb.acos() - 0.5 * k.sqrt();
     (lens / (std::f64::consts::PI * a * a)).clamp(0.0, 1.0)
+}
+
+/// Fraction of a Lambertian exitance that leaves within polar angles `lo`..`hi` [rad] of
+/// the normal: the exitance goes as cos θ sin θ dθ, which integrates to sin² hi − sin² lo.
+pub fn cone_fraction(lo: f64, hi: f64) -> f64 {
+    hi.sin().powi(2) - lo.sin().powi(2)
 }
 
 #[cfg(test)]

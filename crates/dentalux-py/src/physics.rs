@@ -11,3 +11,10 @@ pub fn fresnel_reflectance(cos_i: Vec<f64>, eta_i: f64, eta_t: f64) -> Vec<f64> 
         .map(|c| dentalux_core::fresnel::reflectance(c, eta_i, eta_t))
         .collect()
 }
+
+/// Fraction of a Lambertian exitance inside the detector cone `lo_deg`..`hi_deg` [deg]
+/// (instrument.rs, as the core's windows read it).
+#[pyfunction]
+pub fn cone_fraction(lo_deg: f64, hi_deg: f64) -> f64 {
+    dentalux_core::instrument::cone_fraction(lo_deg.to_radians(), hi_deg.to_radians())
+}

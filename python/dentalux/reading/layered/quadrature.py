@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dentalux import _core
 from dentalux.reading.layered import interpolate
 
 
@@ -85,10 +86,10 @@ def make_nodes(indices, per_interval) -> Nodes:
 
 
 def cone_fraction(cone_deg) -> float:
-    """The Lambertian fraction of the detector cone (lo, hi) [deg]: sin²(hi) − sin²(lo), as
-    the core's Window::cone_fraction."""
-    lo, hi = np.radians(cone_deg)
-    return np.sin(hi) ** 2 - np.sin(lo) ** 2
+    """The Lambertian fraction of the detector cone (lo, hi) [deg], sin²(hi) − sin²(lo):
+    the core's (instrument::cone_fraction), so the solver and the walks read one formula."""
+    lo, hi = (float(a) for a in cone_deg)
+    return _core.cone_fraction(lo, hi)
 
 
 def cone_weights(mu: np.ndarray, mu_lo: float, mu_hi: float) -> np.ndarray:
