@@ -7,6 +7,7 @@ mod physics;
 mod render;
 mod runner;
 mod slab;
+mod special;
 
 use pyo3::prelude::*;
 
@@ -54,6 +55,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(slab::phase_eval, m)?)?;
     m.add_function(wrap_pyfunction!(physics::fresnel_reflectance, m)?)?;
     m.add_function(wrap_pyfunction!(physics::cone_fraction, m)?)?;
+    m.add_function(wrap_pyfunction!(special::bessel_j0, m)?)?;
+    m.add_function(wrap_pyfunction!(special::bessel_j1, m)?)?;
     m.add_function(wrap_pyfunction!(render::render_band, m)?)?;
     m.add_function(wrap_pyfunction!(render::render_bands, m)?)?;
     m.add_function(wrap_pyfunction!(render::camera_project, m)?)?;

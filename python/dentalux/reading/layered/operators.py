@@ -22,9 +22,9 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.special import gammaln, lpmv
 
 from dentalux import _core
+from dentalux.reading.layered import special
 from dentalux.reading.layered.quadrature import Nodes
 
 
@@ -46,13 +46,7 @@ def legendre_moments(g: float, fd: float, lobes, count: int) -> np.ndarray:
 def _associated(mu_key: tuple, modes: int, order: int) -> np.ndarray:
     """sqrt((l-m)!/(l+m)!) P_l^m(x) at x = (mu, -mu): (modes, order, 2N)."""
     mu = np.asarray(mu_key)
-    x = np.concatenate([mu, -mu])
-    out = np.zeros((modes, order, len(x)))
-    for m in range(modes):
-        for ell in range(m, order):
-            norm = np.exp(0.5 * (gammaln(ell - m + 1) - gammaln(ell + m + 1)))
-            out[m, ell] = lpmv(m, ell, x) * norm
-    return out
+    return special.associated_legendre(modes, order, np.concatenate([mu, -mu]))
 
 
 def kernels(chi_star: np.ndarray, mu: np.ndarray, w: np.ndarray, modes: int) -> np.ndarray:

@@ -13,9 +13,9 @@ z tan(theta_j) + sum_{i<j} d_i tan(theta_i); averaged over azimuth that is J0(k 
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import eval_legendre, j0
 
 from dentalux import _core
+from dentalux.reading.layered import special
 from dentalux.reading.layered.operators import legendre_moments
 from dentalux.reading.layered.quadrature import cone_fraction
 
@@ -58,14 +58,14 @@ def correction(band_stacks, ks, n_above: float, cone_deg, order: int) -> np.ndar
                                                 [tuple(x) for x in lay.lobes] if lay.lobes
                                                 else None))
             ls = np.arange(order)
-            trunc = ((2 * ls + 1) / (4 * np.pi) * (chi[:order] - f)) @ eval_legendre(
-                ls[:, None], cos_scat[None, :])
+            trunc = ((2 * ls + 1) / (4 * np.pi) * (chi[:order] - f)) @ special.legendre(
+                order, cos_scat)
             source = lay.mus * exact - lay.mus * trunc  # mus p - mus* p*
             z = (zx + 1) / 2 * lay.thickness
             wz = zw / 2 * lay.thickness
             att = np.exp(-mut * z[:, None] * (1 + 1 / mu_j[None, :]))      # (z, angles)
             disp = shift[None, :] + z[:, None] * tan_j[None, :]
-            lat = j0(ks[:, None, None] * disp[None])                           # (k, z, angles)
+            lat = special.j0(ks[:, None, None] * disp[None])                   # (k, z, angles)
             radiance = (beam * up_att * out_t * (n_above / n[j]) ** 2 * source / mu_j)
             per_angle = np.einsum("z,kza,za->ka", wz, lat, att) * radiance
             out[b] += 2 * np.pi * per_angle @ (w_a * mu_a) / frac

@@ -24,9 +24,9 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from scipy.special import j0, j1
 
 from dentalux.reading.layered import interpolate
+from dentalux.reading.layered.special import j0, j1
 from dentalux.reading.layered.stack import K_NODES, Response
 
 # the k integral: the kernel oscillates with period 2 pi / (largest radius, plus the pair's
