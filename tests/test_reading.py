@@ -146,6 +146,20 @@ def test_shared_walks_match_one_walk_per_band():
         reading.measure(band_stacks, wl, inst, *rb, 100, seed=1, walks="hero")
 
 
+def test_shared_walks_read_the_same_on_one_and_two_threads():
+    """The shared walks' batches are taken by whichever thread is free (crate::batches) and
+    put back in order: the same seed reads the same bits on any number of threads."""
+    inst = instrument.get("contact-probe-3mm")
+    wl = resolve_bands([450.0, 550.0, 650.0])
+    mats = [(dental._resolve_material(m), t) for m, t in STACK]
+    band_stacks = reading.stacks(mats, wl)
+    rb = (np.zeros(len(wl)), np.full(len(wl), 0.9))
+    one, two = (reading.measure(band_stacks, wl, inst, *rb, 3_000, seed=8, walks="shared",
+                                threads=n) for n in (1, 2))
+    np.testing.assert_array_equal(one.values, two.values)
+    np.testing.assert_array_equal(one.stderr, two.stderr)
+
+
 def test_command_line_and_api_read_through_the_same_default(capsys):
     """`dentalux shade X` and `dental.metrics(X)` give the same numbers for the same seed:
     one default instrument for both."""
