@@ -4,6 +4,7 @@ polynomials, and the normalised associated Legendre functions."""
 
 import numpy as np
 import pytest
+from dentalux import _core
 from dentalux.reading.layered import special
 from scipy.special import eval_legendre, gammaln, j0, j1, lpmv
 
@@ -21,6 +22,8 @@ def test_bessel_functions_are_scipys():
     grid = x[:24].reshape(2, 3, 4)
     assert special.j0(grid).shape == (2, 3, 4)
     np.testing.assert_array_equal(special.j1(grid.T), special.j1(grid).T)
+    with pytest.raises(ValueError, match="order = 2: allowed 0 or 1"):
+        _core.bessel_j(2, x)
 
 
 def test_legendre_polynomials_are_scipys():

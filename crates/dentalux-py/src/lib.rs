@@ -55,8 +55,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(slab::phase_eval, m)?)?;
     m.add_function(wrap_pyfunction!(physics::fresnel_reflectance, m)?)?;
     m.add_function(wrap_pyfunction!(physics::cone_fraction, m)?)?;
-    m.add_function(wrap_pyfunction!(special::bessel_j0, m)?)?;
-    m.add_function(wrap_pyfunction!(special::bessel_j1, m)?)?;
+    m.add_function(wrap_pyfunction!(special::bessel_j, m)?)?;
     m.add_function(wrap_pyfunction!(render::render_band, m)?)?;
     m.add_function(wrap_pyfunction!(render::render_bands, m)?)?;
     m.add_function(wrap_pyfunction!(render::camera_project, m)?)?;

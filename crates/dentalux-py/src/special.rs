@@ -4,22 +4,24 @@
 //! reading the import of scipy.special.
 
 use numpy::{IntoPyArray, PyArrayDyn, PyReadonlyArrayDyn};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-/// J0(x) for every element of `x`.
+/// J_order(x) for every element of `x`, order 0 or 1.
 #[pyfunction]
-pub fn bessel_j0<'py>(
+pub fn bessel_j<'py>(
     py: Python<'py>,
+    order: u32,
     x: PyReadonlyArrayDyn<'py, f64>,
-) -> Bound<'py, PyArrayDyn<f64>> {
-    x.as_array().mapv(libm::j0).into_pyarray(py)
-}
-
-/// J1(x) for every element of `x`.
-#[pyfunction]
-pub fn bessel_j1<'py>(
-    py: Python<'py>,
-    x: PyReadonlyArrayDyn<'py, f64>,
-) -> Bound<'py, PyArrayDyn<f64>> {
-    x.as_array().mapv(libm::j1).into_pyarray(py)
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let f = match order {
+        0 => libm::j0,
+        1 => libm::j1,
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "order = {order}: allowed 0 or 1"
+            )))
+        }
+    };
+    Ok(x.as_array().mapv(f).into_pyarray(py))
 }

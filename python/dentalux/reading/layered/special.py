@@ -19,12 +19,12 @@ from dentalux import _core
 
 def j0(x) -> np.ndarray:
     """J0 elementwise."""
-    return _core.bessel_j0(np.ascontiguousarray(x, dtype=float))
+    return _core.bessel_j(0, np.ascontiguousarray(x, dtype=float))
 
 
 def j1(x) -> np.ndarray:
     """J1 elementwise."""
-    return _core.bessel_j1(np.ascontiguousarray(x, dtype=float))
+    return _core.bessel_j(1, np.ascontiguousarray(x, dtype=float))
 
 
 def legendre(count: int, x) -> np.ndarray:
