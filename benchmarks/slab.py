@@ -35,7 +35,7 @@ CPU-second (process CPU time over all threads), which other processes disturb fa
 one thread it is the per-core speed even on a busy machine, and its ratio between N threads
 and one shows the parallel efficiency of the work itself.
 
-    .venv/bin/python benchmarks/slab.py [--repeat 3] [--scale 1.0] [--mcml PATH]
+    .venv/bin/python benchmarks/slab.py [--repeat 3] [--scale 1.0] [--mcml PATH [--rounds 5]]
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ import argparse
 import datetime as dt
 import math
 import os
+import statistics
 import subprocess
 import tempfile
 import time
@@ -146,6 +147,11 @@ def main() -> None:
                     "MCML figures are quoted from issue 2")
     ap.add_argument("--mcml-batches", type=int, default=10, help="independent MCML runs per "
                     "process, for its standard errors (default 10)")
+    ap.add_argument("--rounds", type=int, default=0, help="with --mcml: after the table, this "
+                    "many rounds per case of one MCML process and the lanes walk (ten times the "
+                    "photons) on one thread and on all threads, interleaved, and the median and "
+                    "range of each round's ratios (the machine's speed moves between the "
+                    "table's rows)")
     args = ap.parse_args()
     n_cpu = args.threads or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                              else os.cpu_count())
@@ -181,6 +187,24 @@ def main() -> None:
                 ours_tt = (res.total_transmittance, res.stderr["total_transmittance"])
                 checks.append(f"{name:12} Rd {agreement(rd, ours_rd)}   "
                               f"Tt {agreement(tt, ours_tt)}")
+    if args.mcml and args.rounds > 0:
+        print(f"\n{args.rounds} interleaved rounds per case: x MCML (per CPU-second, the "
+              f"lanes walk on one thread) and scaling ({n_cpu} threads over one, wall clock)")
+        for name, (layer, photons) in CASES.items():
+            photons = max(1, int(photons * args.scale))
+            ratios, scalings = [], []
+            for _ in range(args.rounds):
+                mcml, _, _ = run_mcml(args.mcml, layer, photons, args.mcml_batches, 1)
+                # ten times the photons: a run about as long as MCML's process, so that a
+                # moment's disturbance weighs as little in either
+                one, one_cpu, _ = best_rate(layer, 10 * photons, 1, "weighted", "auto", 1)
+                many, _, _ = best_rate(layer, 10 * photons, n_cpu, "weighted", "auto", 1)
+                ratios.append(one_cpu / mcml)
+                scalings.append(many / one)
+            print(f"{name:12} x MCML median {statistics.median(ratios):.2f} "
+                  f"(range {min(ratios):.2f}-{max(ratios):.2f}); scaling median "
+                  f"{statistics.median(scalings):.2f} (range {min(scalings):.2f}-"
+                  f"{max(scalings):.2f})", flush=True)
     print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     if checks:
         print(f"\nsame answers? MCML ({args.mcml_batches} batches) vs dentalux weighted in "
