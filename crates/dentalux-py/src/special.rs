@@ -1,7 +1,7 @@
 //! Bessel functions of the first kind, J0 and J1, elementwise over numpy arrays: the
 //! layered solver's window kernels need them (the Hankel transforms of discs), and taking
-//! libm's (the FreeBSD msun algorithms, within about 1e-16 of scipy's cephes ones) spares a
-//! reading the import of scipy.special.
+//! libm's (the FreeBSD msun algorithms, within 5e-15 of scipy's cephes ones over 0-6000)
+//! spares a reading the import of scipy.special.
 
 use numpy::{IntoPyArray, PyArrayDyn, PyReadonlyArrayDyn};
 use pyo3::exceptions::PyValueError;

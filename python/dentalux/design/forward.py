@@ -27,6 +27,7 @@ import numpy as np
 
 from dentalux import reading
 from dentalux.color import delta_e00
+from dentalux.reading.layered import interpolate
 from dentalux.slab import Layer
 
 DEFAULT_NODES = {1: 6, 2: 4, 3: 3}
@@ -57,13 +58,9 @@ def axis_weights(nodes: np.ndarray, t) -> np.ndarray:
     n = len(nodes)
     if n == 1:
         return np.ones((t.size, 1))
-    # deferred: scipy's interpolation takes 0.25 s to import, which every command-line reading
-    # would pay through the layer parsing in this package
-    from scipy.interpolate import make_interp_spline
-
-    k = min(3, n - 1)
-    spline = make_interp_spline(np.log(nodes), np.eye(n), k=k)
-    return np.asarray(spline(np.log(np.clip(t, nodes[0], nodes[-1]))))
+    # the not-a-knot cubic spline (the parabola through 3 nodes, the line through 2), as
+    # the instrument window's spline in spatial frequency
+    return interpolate.cubic_spline(np.log(nodes), np.log(np.clip(t, nodes[0], nodes[-1])))
 
 
 class ColourMap:

@@ -58,8 +58,8 @@ def correction(band_stacks, ks, n_above: float, cone_deg, order: int) -> np.ndar
                                                 [tuple(x) for x in lay.lobes] if lay.lobes
                                                 else None))
             ls = np.arange(order)
-            trunc = ((2 * ls + 1) / (4 * np.pi) * (chi[:order] - f)) @ special.legendre(
-                order, cos_scat)
+            trunc = ((2 * ls + 1) / (4 * np.pi) * (chi[:order] - f)) \
+                @ np.polynomial.legendre.legvander(cos_scat, order - 1).T
             source = lay.mus * exact - lay.mus * trunc  # mus p - mus* p*
             z = (zx + 1) / 2 * lay.thickness
             wz = zw / 2 * lay.thickness

@@ -3,8 +3,6 @@ command-line reading about 0.2 s, benchmarks/reading_time.py); the tests hold ea
 scipy's.
 
 - :func:`j0`, :func:`j1`: Bessel functions of the first kind, the core's binding of libm's;
-- :func:`legendre`: Legendre polynomials P_0..P_{n-1} by Bonnet's recurrence
-  (l + 1) P_{l+1} = (2l + 1) x P_l - l P_{l-1};
 - :func:`associated_legendre`: sqrt((l-m)!/(l+m)!) P_l^m (Condon-Shortley phase, as scipy's
   ``lpmv``) by the recurrences of the normalised functions, which stay within [-1, 1] and
   need no factorials (e.g. Press et al., Numerical Recipes, 3rd ed., section 6.7).
@@ -25,19 +23,6 @@ def j0(x) -> np.ndarray:
 def j1(x) -> np.ndarray:
     """J1 elementwise."""
     return _core.bessel_j(1, np.ascontiguousarray(x, dtype=float))
-
-
-def legendre(count: int, x) -> np.ndarray:
-    """(count, *x.shape): P_l(x) for l = 0 .. count - 1."""
-    x = np.asarray(x, float)
-    out = np.empty((count, *x.shape))
-    if count > 0:
-        out[0] = 1.0
-    if count > 1:
-        out[1] = x
-    for ell in range(1, count - 1):
-        out[ell + 1] = ((2 * ell + 1) * x * out[ell] - ell * out[ell - 1]) / (ell + 1)
-    return out
 
 
 def associated_legendre(modes: int, order: int, x) -> np.ndarray:
