@@ -318,3 +318,35 @@ def test_a_window_solves_only_the_spatial_frequencies_it_weighs(name):
                                              "viewed_transmittance")]
             a, b = (poly @ full)[:, read], (poly @ cut)[:, read]  # (backing, key)
             assert np.all(np.abs(b - a) <= window.NODE_TOLERANCE * np.abs(a)), (parts, wl)
+
+
+def test_the_real_form_of_conjugate_modes_reads_as_the_complex_modes(monkeypatch):
+    # a conjugate pair of modes is solved in real arithmetic (operators._times); the same
+    # layers solved in the complex basis (no partners: the fallback for an eigenvalue on
+    # the negative real axis) give the same reflection and transmission to rounding
+    from dentalux.reading.layered import operators as ops
+    from dentalux.reading.layered.quadrature import make_nodes
+
+    layers = [_layers([("enamel", 0.6)], wl)[0] for wl in (400.0, 550.0, 700.0)]
+    optics = stack._optics([[lay] for lay in layers], 0, stack.ORDER)
+    nodes = make_nodes([1.0, layers[0].n, 1.0], stack.NODES_PER_INTERVAL)
+    ks = np.array([0.5, 3.0])
+    real = ops._slab(ops._eigen(optics, layers[0].n, nodes, ks, 5), 0.6)
+    lam = ops._eigen(optics, layers[0].n, nodes, ks, 5)[3] ** 2
+    assert np.any(np.abs(lam.imag) > 1e-6 * np.abs(lam))  # pairs were there to pair
+    monkeypatch.setattr(ops, "_partners", lambda lam: None)
+    complex_ = ops._slab(ops._eigen(optics, layers[0].n, nodes, ks, 5), 0.6)
+    for a, b in zip(real, complex_, strict=True):
+        assert np.abs(a - b).max() < 1e-12 * np.abs(b).max()
+
+
+def test_partners_follow_lapack_conjugate_pairs_and_refuse_negative_real_eigenvalues():
+    from dentalux.reading.layered import operators as ops
+
+    lam = np.array([[2.0, 1 + 1j, 1 - 1j, 3.0, 5 - 2j, 5 + 2j]])
+    assert ops._partners(np.array([[2.0, 1 + 1j, 1 - 1j, 3.0]])).tolist() == [[0, 2, 1, 3]]
+    with pytest.raises(RuntimeError, match="conjugate pairs"):
+        ops._partners(lam)  # the negative imaginary part first: not LAPACK's order
+    assert ops._partners(np.array([[2.0, -1.0 + 0j, 1 + 1j, 1 - 1j]])) is None
+    assert ops._partners(np.array([[2.0, -1.0]])) is None
+    assert ops._partners(np.array([2.0, 4.0])).tolist() == [0, 1]

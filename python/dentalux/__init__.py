@@ -3,9 +3,6 @@
 Units everywhere: lengths in mm, coefficients in 1/mm, wavelengths in nm.
 """
 
-from importlib.metadata import PackageNotFoundError
-from importlib.metadata import version as _dist_version
-
 from dentalux import _core, _guard
 
 _guard.install(_core)  # panics -> RuntimeError, overflows -> ValueError (dentalux._guard)
@@ -14,10 +11,21 @@ from dentalux.render import RenderResult, render  # noqa: E402
 from dentalux.scene import Scene, SceneError, load_scene, scene_from_dict  # noqa: E402
 from dentalux.slab import Layer, SlabResult  # noqa: E402
 
-try:  # one home: pyproject.toml's [project] version, read from the installed metadata
-    __version__ = _dist_version("dentalux")
-except PackageNotFoundError:  # pragma: no cover - a source tree that was never installed
-    __version__ = "0+unknown"
+
+def __getattr__(name: str):
+    # __version__ on first use: importlib.metadata takes a twentieth of a second to import,
+    # a tenth of a command's start-up, and only `dentalux --version` and reports read it
+    if name != "__version__":
+        raise AttributeError(f"module 'dentalux' has no attribute {name!r}")
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:  # one home: pyproject.toml's [project] version, read from the installed metadata
+        value = version("dentalux")
+    except PackageNotFoundError:  # pragma: no cover - a source tree that was never installed
+        value = "0+unknown"
+    globals()["__version__"] = value
+    return value
+
 
 __all__ = ["Layer", "SlabResult", "__version__"]
 __all__ += ["RenderResult", "Scene", "SceneError", "load_scene", "render", "scene_from_dict"]

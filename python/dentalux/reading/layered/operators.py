@@ -202,24 +202,66 @@ def _eigen(optics, n: float, nodes: Nodes, ks: np.ndarray, modes: int):
     lam, v = np.linalg.eig(apb @ (a - b))
     kappa = np.sqrt(lam.astype(complex))
     kappa = np.where(kappa.real < 0, -kappa, kappa)
-    # (A + B) is real: one real inverse for the real and imaginary parts of v kappa
-    rhs = v * kappa[..., None, :]
     inv_apb = np.linalg.inv(apb)
-    p = v + (inv_apb @ rhs.real + 1j * (inv_apb @ rhs.imag))
+    partner = _partners(lam)
+    if partner is None:  # a real negative eigenvalue: its mode has no real form
+        # (A + B) is real: one real inverse for the real and imaginary parts of v kappa
+        rhs = v * kappa[..., None, :]
+        p = v + (inv_apb @ rhs.real + 1j * (inv_apb @ rhs.imag))
+    else:
+        # a conjugate pair (v, conj v) spans the real pair (Re v, Im v): the same modes in
+        # real arithmetic, where diag(f(kappa)) becomes 2 x 2 blocks (_times)
+        v = np.where(np.imag(lam)[..., None, :] < 0, -v.imag, v.real)
+        p = v + inv_apb @ _times(v, kappa, partner, -1)
     q = 2 * v - p
     pinv = np.linalg.inv(p)
-    return p, pinv, pinv @ q, kappa
+    return p, pinv, pinv @ q, kappa, partner
+
+
+def _partners(lam: np.ndarray) -> np.ndarray | None:
+    """For the eigenvalues ``lam`` (..., M) from LAPACK (a conjugate pair in consecutive
+    places, the positive imaginary part first), each one's partner: j + 1 for the first of
+    a pair, j - 1 for the second, j for a real one; None where an eigenvalue is real and
+    negative (its kappa is imaginary, so the real form does not hold)."""
+    lam = np.asarray(lam)
+    idx = np.broadcast_to(np.arange(lam.shape[-1]), lam.shape)
+    if not np.iscomplexobj(lam):
+        return None if (lam < 0).any() else idx.copy()
+    up, down = lam.imag > 0, lam.imag < 0
+    if ((lam.imag == 0) & (lam.real < 0)).any():
+        return None
+    if not (np.array_equal(up[..., :-1], down[..., 1:]) and not up[..., -1].any()
+            and not down[..., 0].any()):
+        raise RuntimeError("eigenvalues not in conjugate pairs")
+    return idx + up - down
+
+
+def _times(m: np.ndarray, f: np.ndarray, partner: np.ndarray | None, axis: int
+           ) -> np.ndarray:
+    """``m`` diag(f) (axis -1) or diag(f) ``m`` (axis -2) in the basis of :func:`_eigen`.
+    For a pair (x, y) = (Re v, Im v) with f = a + ib at v, diag(f, conj f) is the real block
+    [[a, b], [-b, a]] from the right: column x -> a x - b y, y -> b x + a y; from the left,
+    row x -> a x + b y, y -> -b x + a y. With f at each column's own eigenvalue (conj f at
+    the second), both are m Re f -+ (m with partners swapped) Im f. ``partner`` None: the
+    complex basis, f a plain diagonal."""
+    if partner is None:
+        return m * (f[..., None, :] if axis == -1 else f[..., :, None])
+    if axis == -1:
+        swapped = np.take_along_axis(m, partner[..., None, :], axis=-1)
+        return m * f.real[..., None, :] - swapped * f.imag[..., None, :]
+    swapped = np.take_along_axis(m, partner[..., :, None], axis=-2)
+    return m * f.real[..., :, None] + swapped * f.imag[..., :, None]
 
 
 def _slab(eig, thickness: float) -> tuple[np.ndarray, np.ndarray]:
     """A layer's reflection and transmission at ``thickness`` from :func:`_eigen`'s parts."""
-    p, pinv, x, kappa = eig
-    e = np.exp(-kappa * thickness)[..., None, :]  # right-multiplying by diag(E)
-    xe = x * e
+    p, pinv, x, kappa, partner = eig
+    e = np.exp(-kappa * thickness)
+    xe = _times(x, e, partner, -1)
     eye = np.eye(x.shape[-1])
     inner = np.linalg.solve(eye - xe @ xe, pinv)
-    r = p @ ((x - np.swapaxes(e, -1, -2) * xe) @ inner)
-    t = p @ ((eye * e - x @ xe) @ inner)
+    r = p @ ((x - _times(xe, e, partner, -2)) @ inner)
+    t = p @ ((_times(np.broadcast_to(eye, x.shape), e, partner, -1) - x @ xe) @ inner)
     return r.real, t.real
 
 
