@@ -149,9 +149,10 @@ def main() -> None:
                     "process, for its standard errors (default 10)")
     ap.add_argument("--rounds", type=int, default=0, help="with --mcml: after the table, this "
                     "many rounds per case of one MCML process and the lanes walk (ten times the "
-                    "photons) on one thread and on all threads, interleaved, and the median and "
+                    "photons; on all threads as many again per thread) on one thread and on all "
+                    "threads, interleaved, and the median and "
                     "range of each round's ratios (the machine's speed moves between the "
-                    "table's rows)")
+                    "table's rows), and the scaling of the fastest runs")
     args = ap.parse_args()
     n_cpu = args.threads or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                              else os.cpu_count())
@@ -192,19 +193,24 @@ def main() -> None:
               f"lanes walk on one thread) and scaling ({n_cpu} threads over one, wall clock)")
         for name, (layer, photons) in CASES.items():
             photons = max(1, int(photons * args.scale))
-            ratios, scalings = [], []
+            ratios, ones, manys = [], [], []
             for _ in range(args.rounds):
                 mcml, _, _ = run_mcml(args.mcml, layer, photons, args.mcml_batches, 1)
                 # ten times the photons: a run about as long as MCML's process, so that a
-                # moment's disturbance weighs as little in either
+                # moment's disturbance weighs as little in either; on all threads as many
+                # again per thread, so that both runs take as long
                 one, one_cpu, _ = best_rate(layer, 10 * photons, 1, "weighted", "auto", 1)
-                many, _, _ = best_rate(layer, 10 * photons, n_cpu, "weighted", "auto", 1)
+                many, _, _ = best_rate(layer, 10 * n_cpu * photons, n_cpu, "weighted", "auto",
+                                       1)
                 ratios.append(one_cpu / mcml)
-                scalings.append(many / one)
+                ones.append(one)
+                manys.append(many)
+            scalings = [m / o for m, o in zip(manys, ones, strict=True)]
             print(f"{name:12} x MCML median {statistics.median(ratios):.2f} "
                   f"(range {min(ratios):.2f}-{max(ratios):.2f}); scaling median "
                   f"{statistics.median(scalings):.2f} (range {min(scalings):.2f}-"
-                  f"{max(scalings):.2f})", flush=True)
+                  f"{max(scalings):.2f}), best over best {max(manys) / max(ones):.2f}",
+                  flush=True)
     print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     if checks:
         print(f"\nsame answers? MCML ({args.mcml_batches} batches) vs dentalux weighted in "
