@@ -29,6 +29,8 @@ CASES = {
     "stack 0.6/0.9, probe": ([("enamel", 0.6), ("dentin", 0.9)], "contact-probe-3mm"),
     "stack 0.6/0.9, 45-0": ([("enamel", 0.6), ("dentin", 0.9)], "45-0"),
     "enamel 1 mm, fibre probe": ([("enamel", 1.0)], "fibre-probe"),
+    "stack 0.6/0.9, d/8": ([("enamel", 0.6), ("dentin", 0.9)], "d8-benchtop-sav"),
+    "stack 0.6/0.9, noncontact": ([("enamel", 0.6), ("dentin", 0.9)], "noncontact"),
 }
 DEFAULT = dict(per_interval=stack.NODES_PER_INTERVAL, ks=stack.K_NODES,
                modes=stack.MODES_BY_K)
@@ -54,6 +56,7 @@ CANDIDATES = {
                                                (np.inf, 4))),
     "5 modes past k 1.5": dict(DEFAULT, modes=((0.0, 1), (0.3, 3), (1.5, 4), (12.0, 5),
                                                (np.inf, 5))),
+    "4 modes past k 1.5": dict(DEFAULT, modes=((0.0, 1), (0.3, 3), (1.5, 4), (np.inf, 4))),
     "14 spatial frequencies": dict(DEFAULT, ks=K_14),
     "nodes (7, 5)": dict(DEFAULT, per_interval=(7, 5)),
     "nodes (10, 8)": dict(DEFAULT, per_interval=(10, 8)),
