@@ -350,3 +350,48 @@ def test_partners_follow_lapack_conjugate_pairs_and_refuse_negative_real_eigenva
     assert ops._partners(np.array([[2.0, -1.0 + 0j, 1 + 1j, 1 - 1j]])) is None
     assert ops._partners(np.array([[2.0, -1.0]])) is None
     assert ops._partners(np.array([2.0, 4.0])).tolist() == [0, 1]
+
+
+@pytest.mark.parametrize("name, light", [("45-0", True), ("d8-benchtop-mav", True),
+                                         ("d8-benchtop-sav", False), ("noncontact", False),
+                                         (PROBE, False), ("fibre-probe", False)])
+def test_a_window_that_weighs_little_past_1_5_per_mm_is_solved_with_fewer_modes(name, light):
+    # the windows whose weights at the nodes with one mode fewer sum within
+    # FEWER_MODES_WEIGHT of the overlap take stack.MODES_BY_K_LIGHT; those read the stack as
+    # a reference with four more modes everywhere does, within stack.ACCURACY
+    cone, lit, view, pairs = engine._regions(instrument.get(name))
+    p = window.as_pairs(lit, view, pairs)
+    ks = window.nodes_for(p)
+    schedule = window.modes_by_k(p, ks)
+    assert (schedule == stack.MODES_BY_K_LIGHT) == light, schedule
+    if not light:
+        return
+    plus = tuple((k, m + 4) for k, m in stack.MODES_BY_K)
+    poly = np.array([rb ** np.arange(ORDERS) for rb in (0.0, 0.85)])
+    read = [KEYS.index(k) for k in ("viewed_reflectance", "viewed_cone_reflectance",
+                                     "viewed_transmittance")]
+    for wl in (400.0, 700.0):
+        bands = [_layers([("enamel", 0.6), ("dentin", 0.9)], wl)]
+        local = layered.local_parts(bands, 1.0, 1.0)
+        first = _core.fresnel_reflectance([1.0], 1.0, bands[0][0].n)[0]
+        light_sums, ref_sums = (
+            layered.order_sums(layered.responses(bands, 1.0, 1.0, cone, ks=ks, modes_by_k=m),
+                               local, first, lit, view, engine.MAX_ORDER, KEYS, pairs)[0]
+            for m in (schedule, plus))
+        a, b = (poly @ light_sums)[:, read], (poly @ ref_sums)[:, read]
+        assert np.all(np.abs(a - b) <= stack.ACCURACY * np.abs(b)), (wl, a, b)
+
+
+def test_a_reading_through_the_default_instrument_takes_the_light_schedule(monkeypatch):
+    # the engine passes the window's schedule to the solver
+    seen = []
+    solve = layered.responses_many
+
+    def spy(*args, **kw):
+        seen.append(kw.get("modes_by_k"))
+        return solve(*args, **kw)
+
+    monkeypatch.setattr(layered, "responses_many", spy)
+    engine._SOLVED.clear()
+    dental.read([("enamel", 1.0)], bands=[450.0, 550.0])
+    assert seen and all(s == stack.MODES_BY_K_LIGHT for s in seen)

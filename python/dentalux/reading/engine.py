@@ -276,6 +276,7 @@ def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int,
 
     cone, lit, view, pairs = _regions(inst)
     ks = window.nodes_for(window.as_pairs(lit, view, pairs))
+    modes = window.modes_by_k(window.as_pairs(lit, view, pairs), ks)
     outs = [np.zeros((len(bs), MAX_ORDER + 1, len(WINDOW_KEYS))) for bs in specimens]
     groups: dict[tuple, list[tuple[int, list[int]]]] = {}
     for spec_i, bs in enumerate(specimens):
@@ -295,7 +296,8 @@ def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int,
         work = [(spec_i, idx) for spec_i, idx in work if idx]
         groups = [[specimens[spec_i][i] for i in idx] for spec_i, idx in work]
         with layered.reuse():
-            found = layered.responses_many(groups, 1.0, n_below, cone, ks, stop=stop.is_set)
+            found = layered.responses_many(groups, 1.0, n_below, cone, ks, stop=stop.is_set,
+                                           modes_by_k=modes)
             for (spec_i, idx), group, res in zip(work, groups, found, strict=True):
                 local = layered.local_parts(group, 1.0, n_below)
                 outs[spec_i][idx] = layered.order_sums(res, local, first, lit, view,
