@@ -87,6 +87,57 @@ fn every_build_gives_the_same_bits() {
 }
 
 #[test]
+fn an_index_matched_stack_skips_fresnel_with_the_same_bits() {
+    // MCML's classic slab and a two-layer stack of index 1 in air, lit normally and
+    // diffusely: the walk without the Fresnel terms tallies what the general walk does
+    let mut two = weighted(one_layer(0.5, 20.0, 0.9, 1.0, 0.3, 3000));
+    two.layers
+        .push(layer(0.1, 5.0, PhaseFunction::Isotropic, 1.0, 0.5));
+    let mut diffuse = two.clone();
+    diffuse.incidence = Incidence::Diffuse;
+    let control = Control::new();
+    for cfg in [
+        weighted(one_layer(1.0, 9.0, 0.75, 1.0, 0.2, 3000)),
+        two,
+        diffuse,
+    ] {
+        let plan = Plan::new(&cfg).unwrap();
+        assert!(plan.matched);
+        let run = |matched: bool| {
+            let mut tally = Tally::new(&cfg);
+            let batch = Batch {
+                plan: &plan,
+                rng: &mut Stream::new(5, 2, 7),
+                count: 3000,
+                tally: &mut tally,
+                control: &control,
+            };
+            if matched {
+                walk::<true>(batch).unwrap();
+            } else {
+                walk::<false>(batch).unwrap();
+            }
+            tally
+        };
+        let (fast, general) = (run(true), run(false));
+        assert!(fast.sum[TOT_R] > 0.0 && fast.sum[TOT_T] > 0.0);
+        assert_eq!(fast.sum, general.sum);
+        assert_eq!(fast.sumsq, general.sumsq);
+        assert_eq!(fast.absorbed, general.absorbed);
+    }
+    // an index step anywhere, the media outside included, takes the general walk
+    let mut below = weighted(one_layer(1.0, 9.0, 0.75, 1.0, 0.2, 3000));
+    below.n_below = 1.33;
+    for cfg in [
+        mixed_stack(10),
+        below,
+        weighted(one_layer(0.04, 26.0, 0.9, 1.54, 2.0, 10)),
+    ] {
+        assert!(!Plan::new(&cfg).unwrap().matched);
+    }
+}
+
+#[test]
 fn energy_adds_up_and_the_batch_count_is_exact() {
     for n in [1, 15, 16, 17, 1000] {
         let cfg = mixed_stack(n);
