@@ -55,28 +55,31 @@ fn lanes_take_only_what_they_can_walk() {
     assert!(Plan::new(&angular).is_none());
 }
 
+/// One batch of 3000 photons of `cfg` (stream 5, 2, 7), walked by `run`.
+fn one_batch(cfg: &SlabConfig, run: impl FnOnce(Batch<'_>) -> Result<()>) -> Tally {
+    let plan = Plan::new(cfg).unwrap();
+    let control = Control::new();
+    let mut tally = Tally::new(cfg);
+    run(Batch {
+        plan: &plan,
+        rng: &mut Stream::new(5, 2, 7),
+        count: 3000,
+        tally: &mut tally,
+        control: &control,
+    })
+    .unwrap();
+    tally
+}
+
 #[test]
 fn every_build_gives_the_same_bits() {
     let cfg = mixed_stack(3000);
-    let plan = Plan::new(&cfg).unwrap();
-    let control = Control::new();
     let mut archs = vec![pulp::Arch::Scalar, pulp::Arch::new()];
     #[cfg(target_arch = "x86_64")]
     archs.extend(pulp::x86::V3::try_new().map(pulp::Arch::V3));
     let tallies: Vec<Tally> = archs
         .into_iter()
-        .map(|arch| {
-            let mut tally = Tally::new(&cfg);
-            let batch = Batch {
-                plan: &plan,
-                rng: &mut Stream::new(5, 2, 7),
-                count: 3000,
-                tally: &mut tally,
-                control: &control,
-            };
-            arch.dispatch(batch).unwrap();
-            tally
-        })
+        .map(|arch| one_batch(&cfg, |batch| arch.dispatch(batch)))
         .collect();
     assert!(tallies[0].sum[TOT_R] > 0.0);
     for t in &tallies[1..] {
@@ -95,31 +98,14 @@ fn an_index_matched_stack_skips_fresnel_with_the_same_bits() {
         .push(layer(0.1, 5.0, PhaseFunction::Isotropic, 1.0, 0.5));
     let mut diffuse = two.clone();
     diffuse.incidence = Incidence::Diffuse;
-    let control = Control::new();
     for cfg in [
         weighted(one_layer(1.0, 9.0, 0.75, 1.0, 0.2, 3000)),
         two,
         diffuse,
     ] {
-        let plan = Plan::new(&cfg).unwrap();
-        assert!(plan.matched);
-        let run = |matched: bool| {
-            let mut tally = Tally::new(&cfg);
-            let batch = Batch {
-                plan: &plan,
-                rng: &mut Stream::new(5, 2, 7),
-                count: 3000,
-                tally: &mut tally,
-                control: &control,
-            };
-            if matched {
-                walk::<true>(batch).unwrap();
-            } else {
-                walk::<false>(batch).unwrap();
-            }
-            tally
-        };
-        let (fast, general) = (run(true), run(false));
+        assert!(Plan::new(&cfg).unwrap().matched);
+        let fast = one_batch(&cfg, walk::<true>);
+        let general = one_batch(&cfg, walk::<false>);
         assert!(fast.sum[TOT_R] > 0.0 && fast.sum[TOT_T] > 0.0);
         assert_eq!(fast.sum, general.sum);
         assert_eq!(fast.sumsq, general.sumsq);
