@@ -150,9 +150,9 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=0, help="with --mcml: after the table, this "
                     "many rounds per case of one MCML process and the lanes walk (ten times the "
                     "photons; on all threads as many again per thread) on one thread and on all "
-                    "threads, interleaved, and the median and "
-                    "range of each round's ratios (the machine's speed moves between the "
-                    "table's rows), and the scaling of the fastest runs")
+                    "threads, interleaved, and the median and range of each round's ratios (the "
+                    "machine's speed moves between the table's rows), and the scaling of the "
+                    "fastest runs")
     args = ap.parse_args()
     n_cpu = args.threads or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                              else os.cpu_count())

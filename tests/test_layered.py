@@ -331,8 +331,9 @@ def test_the_real_form_of_conjugate_modes_reads_as_the_complex_modes(monkeypatch
     optics = stack._optics([[lay] for lay in layers], 0, stack.ORDER)
     nodes = make_nodes([1.0, layers[0].n, 1.0], stack.NODES_PER_INTERVAL)
     ks = np.array([0.5, 3.0])
-    real = ops._slab(ops._eigen(optics, layers[0].n, nodes, ks, 5), 0.6)
-    lam = ops._eigen(optics, layers[0].n, nodes, ks, 5)[3] ** 2
+    eig = ops._eigen(optics, layers[0].n, nodes, ks, 5)
+    real = ops._slab(eig, 0.6)
+    lam = eig[3] ** 2
     assert np.any(np.abs(lam.imag) > 1e-6 * np.abs(lam))  # pairs were there to pair
     monkeypatch.setattr(ops, "_partners", lambda lam: None)
     complex_ = ops._slab(ops._eigen(optics, layers[0].n, nodes, ks, 5), 0.6)
@@ -343,10 +344,10 @@ def test_the_real_form_of_conjugate_modes_reads_as_the_complex_modes(monkeypatch
 def test_partners_follow_lapack_conjugate_pairs_and_refuse_negative_real_eigenvalues():
     from dentalux.reading.layered import operators as ops
 
-    lam = np.array([[2.0, 1 + 1j, 1 - 1j, 3.0, 5 - 2j, 5 + 2j]])
     assert ops._partners(np.array([[2.0, 1 + 1j, 1 - 1j, 3.0]])).tolist() == [[0, 2, 1, 3]]
     with pytest.raises(RuntimeError, match="conjugate pairs"):
-        ops._partners(lam)  # the negative imaginary part first: not LAPACK's order
+        # the negative imaginary part first: not LAPACK's order
+        ops._partners(np.array([[2.0, 1 + 1j, 1 - 1j, 3.0, 5 - 2j, 5 + 2j]]))
     assert ops._partners(np.array([[2.0, -1.0 + 0j, 1 + 1j, 1 - 1j]])) is None
     assert ops._partners(np.array([[2.0, -1.0]])) is None
     assert ops._partners(np.array([2.0, 4.0])).tolist() == [0, 1]

@@ -275,8 +275,9 @@ def _solve_orders_uncached(specimens, inst, n_below: float, cb, done: int,
     from dentalux.reading.layered import window
 
     cone, lit, view, pairs = _regions(inst)
-    ks = window.nodes_for(window.as_pairs(lit, view, pairs))
-    modes = window.modes_by_k(window.as_pairs(lit, view, pairs), ks)
+    regions = window.as_pairs(lit, view, pairs)
+    ks = window.nodes_for(regions)
+    modes = window.modes_by_k(regions, ks)
     outs = [np.zeros((len(bs), MAX_ORDER + 1, len(WINDOW_KEYS))) for bs in specimens]
     groups: dict[tuple, list[tuple[int, list[int]]]] = {}
     for spec_i, bs in enumerate(specimens):

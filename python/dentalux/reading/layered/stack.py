@@ -34,7 +34,7 @@ K_NODES = (0.0, 0.1, 0.25, 0.5, 0.8, 1.2, 1.8, 3.0, 5.0, 9.0, 16.0, 32.0)
 #: against 4 more modes everywhere (benchmarks/layered_settings.py), 5 modes at 1.8-9 /mm
 #: read within 0.06 % where 6 read within 0.53 %, at 25 % less CPU
 MODES_BY_K = ((0.0, 1), (0.3, 3), (1.5, 4), (12.0, 5), (np.inf, 4))
-#: the modes for a window that weighs little where MODES_BY_K takes 5 (window.modes_for):
+#: the modes for a window that weighs little where MODES_BY_K takes 5 (window.modes_by_k):
 #: 4 there. Four modes leave up to 1.8 % of the k = 0 response at 1.8-9 /mm where five
 #: leave 0.7 % (against four more modes: enamel, dentin and their stack, 400-700 nm)
 MODES_BY_K_LIGHT = ((0.0, 1), (0.3, 3), (np.inf, 4))
